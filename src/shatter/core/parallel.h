@@ -1,0 +1,55 @@
+// Threading. Results never depend on the thread count: parallel loops write only to their own
+// indices, and reductions go through fixed-size chunks summed in chunk order.
+#pragma once
+
+#include <cstdint>
+#include <algorithm>
+#include <vector>
+
+#ifdef SHATTER_HAS_OPENMP
+#include <omp.h>
+#endif
+
+namespace shatter {
+
+/// Threads used by shatter's parallel loops (default: hardware threads). 1 = serial.
+void set_num_threads(int n);
+int num_threads();
+
+/// for i in [begin, end): body(i). Iterations must be independent.
+template <class Body>
+void parallel_for(std::int64_t begin, std::int64_t end, Body&& body, std::int64_t min_parallel = 2048) {
+#ifdef SHATTER_HAS_OPENMP
+  const int threads = num_threads();
+  if (threads > 1 && end - begin >= min_parallel) {
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (std::int64_t i = begin; i < end; ++i) body(i);
+    return;
+  }
+#else
+  (void)min_parallel;
+#endif
+  for (std::int64_t i = begin; i < end; ++i) body(i);
+}
+
+/// Deterministic sum of body(i) over [begin, end): partial sums over fixed chunks of `chunk`
+/// indices (independent of the thread count), then added in chunk order.
+template <class T, class Body>
+T parallel_sum(std::int64_t begin, std::int64_t end, T zero, Body&& body, std::int64_t chunk = 4096) {
+  const std::int64_t n = end - begin;
+  if (n <= 0) return zero;
+  const std::int64_t chunks = (n + chunk - 1) / chunk;
+  std::vector<T> partial(static_cast<std::size_t>(chunks), zero);
+  parallel_for(0, chunks, [&](std::int64_t c) {
+    T s = zero;
+    const std::int64_t lo = begin + c * chunk;
+    const std::int64_t hi = std::min(end, lo + chunk);
+    for (std::int64_t i = lo; i < hi; ++i) s += body(i);
+    partial[static_cast<std::size_t>(c)] = s;
+  }, 2);
+  T total = zero;
+  for (const T& p : partial) total += p;
+  return total;
+}
+
+}  // namespace shatter

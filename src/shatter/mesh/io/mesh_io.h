@@ -1,0 +1,122 @@
+// Reading and writing tetrahedral meshes and boundary surfaces, format chosen by file extension.
+//
+// Read:  .msh (Gmsh 2.2 / 4.1, ASCII / binary), .node + .ele (TetGen), .vtk (legacy 4.2 / 5.1,
+//        ASCII / binary), .vtu (VTK XML), .mesh (MEDIT), .inp (Abaqus / CalculiX subset).
+// Write: the same volume formats (.msh written as 4.1), plus boundary surfaces .obj, .ply, .stl.
+// docs/formats.md lists what each reader accepts and the limits.
+//
+// Every reader parses bytes already in memory (so fuzzers and tests can feed it directly), checks
+// every count against the bytes that remain before allocating, and returns an Error with the file,
+// line (text) or byte offset (binary) and what was expected. Every writer streams into an
+// std::ostream; write_mesh() / write_surface() put the result in place atomically.
+#pragma once
+
+#include <cstdint>
+#include <iosfwd>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "shatter/core/error.h"
+#include "shatter/mesh/tet_mesh.h"
+#include "shatter/mesh/topology.h"
+
+namespace shatter {
+
+/// A mesh as read, with notes on what the file held that is not a linear tet.
+struct MeshReadResult {
+  TetMesh mesh;
+  std::string format;                 ///< "msh 4.1 binary", "vtk 5.1 ascii", ...
+  std::vector<std::string> skipped;   ///< e.g. "120 triangles (gmsh type 2)", one line per kind
+};
+
+/// Per-node and per-tet data written alongside a mesh (VTU / VTK / MSH views).
+struct MeshField {
+  std::string name;
+  int components = 1;                 ///< 1 (scalar), 3 (vector), 6 (symmetric tensor xx yy zz xy yz zx) ...
+  std::vector<double> values;         ///< (#nodes or #tets) x components, row-major
+};
+struct MeshFields {
+  std::vector<MeshField> node_fields; ///< point data
+  std::vector<MeshField> tet_fields;  ///< cell data
+};
+
+enum class MeshFormat { unknown, msh, tetgen, vtk, vtu, medit, inp };
+/// By extension: .msh .node .ele .vtk .vtu .mesh .inp (case-insensitive).
+MeshFormat mesh_format_from_path(const std::string& path);
+
+struct MeshWriteOptions {
+  bool binary = false;                ///< msh / vtk / vtu: binary payload (vtu: base64 inline)
+  MeshFields fields;                  ///< written where the format can hold them (vtu, vtk)
+};
+
+/// Read any supported volume format; the mesh is validated (inverted tets reoriented with a
+/// warning; any other error fails with the file name and ids).
+Result<MeshReadResult> read_mesh(const std::string& path);
+/// Write any supported volume format by extension, atomically. For TetGen, `path` may end in
+/// .node or .ele; both files are written.
+Result<void> write_mesh(const std::string& path, const TetMesh& mesh, const MeshWriteOptions& options = {});
+
+// --- Per-format parsers (bytes in memory; `name` is used in error messages). ---
+Result<MeshReadResult> parse_msh(std::string_view bytes, const std::string& name);
+Result<MeshReadResult> parse_vtk(std::string_view bytes, const std::string& name);
+Result<MeshReadResult> parse_vtu(std::string_view bytes, const std::string& name);
+Result<MeshReadResult> parse_medit(std::string_view bytes, const std::string& name);
+Result<MeshReadResult> parse_inp(std::string_view bytes, const std::string& name);
+Result<MeshReadResult> parse_tetgen(std::string_view node_bytes, const std::string& node_name,
+                                    std::string_view ele_bytes, const std::string& ele_name);
+
+// --- Per-format writers (stream out; the caller makes it atomic). ---
+Result<void> write_msh(std::ostream& out, const TetMesh& mesh, const MeshWriteOptions& options = {});
+Result<void> write_vtk(std::ostream& out, const TetMesh& mesh, const MeshWriteOptions& options = {});
+Result<void> write_vtu(std::ostream& out, const TetMesh& mesh, const MeshWriteOptions& options = {});
+Result<void> write_medit(std::ostream& out, const TetMesh& mesh);
+Result<void> write_inp(std::ostream& out, const TetMesh& mesh);
+Result<void> write_tetgen_node(std::ostream& out, const TetMesh& mesh);
+Result<void> write_tetgen_ele(std::ostream& out, const TetMesh& mesh);
+
+/// A ParaView collection (.pvd) of time steps; rewritten atomically at every add() so a run that
+/// stops still leaves a valid series.
+class PvdSeries {
+ public:
+  explicit PvdSeries(std::string pvd_path) : path_(std::move(pvd_path)) {}
+  /// Record `file` (relative to the .pvd's folder) at `time` and rewrite the .pvd.
+  Result<void> add(double time, const std::string& file);
+  [[nodiscard]] const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::vector<std::pair<double, std::string>> entries_;
+};
+
+// --- Triangle surfaces. ---
+enum class SurfaceFormat { unknown, obj, ply, stl };
+SurfaceFormat surface_format_from_path(const std::string& path);
+
+struct SurfaceWriteOptions {
+  bool binary = false;                ///< ply / stl
+  /// File id of each vertex (e.g. the tet-mesh node id), written where the format can hold it
+  /// (PLY property `id`; an OBJ comment). Empty: none.
+  std::vector<FileId> vertex_ids;
+};
+Result<void> write_surface(const std::string& path, const TriSurface& surface,
+                           const SurfaceWriteOptions& options = {});
+Result<void> write_obj(std::ostream& out, const TriSurface& surface, const SurfaceWriteOptions& options = {});
+Result<void> write_ply(std::ostream& out, const TriSurface& surface, const SurfaceWriteOptions& options = {});
+Result<void> write_stl(std::ostream& out, const TriSurface& surface, const SurfaceWriteOptions& options = {});
+
+/// A triangle surface as read (positions + triangles; vertex_node / triangle_tet left empty).
+struct SurfaceReadResult {
+  TriSurface surface;
+  std::vector<FileId> vertex_ids;     ///< from PLY `id` property, else empty
+  std::string format;
+  std::vector<std::string> skipped;   ///< e.g. "3 lines", "polygons triangulated: 12"
+};
+/// OBJ (v/f; polygons fan-triangulated; negative indices), PLY (ASCII / binary LE and BE),
+/// STL (ASCII / binary; coincident vertices welded exactly).
+Result<SurfaceReadResult> read_surface(const std::string& path);
+Result<SurfaceReadResult> parse_obj(std::string_view bytes, const std::string& name);
+Result<SurfaceReadResult> parse_ply(std::string_view bytes, const std::string& name);
+Result<SurfaceReadResult> parse_stl(std::string_view bytes, const std::string& name);
+
+}  // namespace shatter

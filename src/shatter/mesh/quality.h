@@ -1,0 +1,31 @@
+// Element quality: dihedral angles and aspect ratio, per tet and summarised.
+#pragma once
+
+#include <array>
+
+#include "shatter/mesh/tet_mesh.h"
+
+namespace shatter {
+
+/// The six interior dihedral angles of the tet, radians, at edges (01,02,03,12,13,23).
+std::array<double, 6> dihedral_angles(const Mat34& x);
+
+/// Aspect ratio = circumradius / (3 * inradius): 1 for the regular tet, larger is worse,
+/// +inf for a degenerate tet.
+double aspect_ratio(const Mat34& x);
+
+struct QualitySummary {
+  double volume = 0;              ///< total signed volume, m^3
+  double min_tet_volume = 0;      ///< smallest signed tet volume, m^3
+  double max_tet_volume = 0;
+  double min_dihedral_deg = 0;    ///< over all tets, degrees
+  double max_dihedral_deg = 0;
+  double min_aspect = 0;
+  double max_aspect = 0;
+  double mean_aspect = 0;
+  Index worst_aspect_tet = -1;    ///< tet index with the largest aspect ratio
+  Index min_dihedral_tet = -1;    ///< tet index with the smallest dihedral angle
+};
+QualitySummary mesh_quality(const TetMesh& mesh);
+
+}  // namespace shatter

@@ -1,0 +1,101 @@
+#include "shatter/mesh/topology.h"
+
+#include <algorithm>
+#include <numeric>
+
+namespace shatter {
+
+TetFaces compute_faces(const TetMesh& mesh) {
+  struct Entry {
+    std::array<Index, 3> key;  // sorted corners
+    Index tet;
+    int local;
+  };
+  const Index nt = mesh.num_tets();
+  std::vector<Entry> entries;
+  entries.reserve(static_cast<std::size_t>(nt) * 4);
+  for (Index e = 0; e < nt; ++e)
+    for (int k = 0; k < 4; ++k) {
+      std::array<Index, 3> key = {mesh.tets[e][kTetFaces[k][0]], mesh.tets[e][kTetFaces[k][1]],
+                                  mesh.tets[e][kTetFaces[k][2]]};
+      std::sort(key.begin(), key.end());
+      entries.push_back({key, e, k});
+    }
+  std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
+    if (a.key != b.key) return a.key < b.key;
+    return a.tet != b.tet ? a.tet < b.tet : a.local < b.local;
+  });
+  TetFaces out;
+  out.tet_faces.assign(nt, {-1, -1, -1, -1});
+  for (std::size_t i = 0; i < entries.size();) {
+    std::size_t j = i;
+    while (j < entries.size() && entries[j].key == entries[i].key) ++j;
+    const Index f = static_cast<Index>(out.faces.size());
+    const Entry& first = entries[i];
+    const TetIndices& t = mesh.tets[first.tet];
+    out.faces.push_back({t[kTetFaces[first.local][0]], t[kTetFaces[first.local][1]], t[kTetFaces[first.local][2]]});
+    out.face_tets.push_back({first.tet, j - i > 1 ? entries[i + 1].tet : Index(-1)});
+    for (std::size_t m = i; m < j; ++m) {
+      out.tet_faces[entries[m].tet][entries[m].local] = f;
+      if (m >= i + 2) out.overshared.push_back({f, entries[m].tet});
+    }
+    i = j;
+  }
+  return out;
+}
+
+TriSurface boundary_surface(const TetMesh& mesh, const TetFaces& faces) {
+  TriSurface s;
+  std::vector<Index> vertex_of_node(mesh.positions.size(), -1);
+  for (Index f = 0; f < faces.num_faces(); ++f)
+    if (faces.is_boundary(f))
+      for (Index v : faces.faces[f]) vertex_of_node[v] = 0;
+  for (Index i = 0; i < mesh.num_nodes(); ++i)
+    if (vertex_of_node[i] == 0) {
+      vertex_of_node[i] = static_cast<Index>(s.positions.size());
+      s.positions.push_back(mesh.positions[i]);
+      s.vertex_node.push_back(i);
+    }
+  for (Index f = 0; f < faces.num_faces(); ++f)
+    if (faces.is_boundary(f)) {
+      const TriIndices& t = faces.faces[f];
+      s.triangles.push_back({vertex_of_node[t[0]], vertex_of_node[t[1]], vertex_of_node[t[2]]});
+      s.triangle_tet.push_back(faces.face_tets[f][0]);
+    }
+  return s;
+}
+
+TriSurface boundary_surface(const TetMesh& mesh) { return boundary_surface(mesh, compute_faces(mesh)); }
+
+namespace {
+Index find_root(std::vector<Index>& parent, Index i) {
+  while (parent[i] != i) {
+    parent[i] = parent[parent[i]];
+    i = parent[i];
+  }
+  return i;
+}
+}  // namespace
+
+Components connected_components(const TetMesh& mesh) {
+  // Union-find over nodes through tets, then label tets by their first node's root.
+  std::vector<Index> parent(mesh.positions.size());
+  std::iota(parent.begin(), parent.end(), Index(0));
+  for (const TetIndices& t : mesh.tets)
+    for (int k = 1; k < 4; ++k) {
+      const Index a = find_root(parent, t[0]);
+      const Index b = find_root(parent, t[k]);
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    }
+  Components c;
+  c.tet_component.resize(mesh.tets.size());
+  std::vector<Index> label(mesh.positions.size(), -1);
+  for (Index e = 0; e < mesh.num_tets(); ++e) {
+    const Index r = find_root(parent, mesh.tets[e][0]);
+    if (label[r] < 0) label[r] = c.count++;
+    c.tet_component[e] = label[r];
+  }
+  return c;
+}
+
+}  // namespace shatter

@@ -1,0 +1,60 @@
+// Derived topology of a TetMesh: unique faces with the tets on each side, face adjacency,
+// the boundary surface as outward-oriented triangles, and connected components.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "shatter/mesh/tet_mesh.h"
+
+namespace shatter {
+
+/// Local faces of a positively oriented tet (a,b,c,d): face k is opposite corner k and its
+/// corners, in this order, give the outward normal by the right-hand rule.
+inline constexpr std::array<std::array<int, 3>, 4> kTetFaces = {{{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}};
+
+struct TetFaces {
+  /// Each unique face: corners as seen from tets[0] (outward for tets[0]) (#faces).
+  std::vector<TriIndices> faces;
+  /// The tets sharing each face: [0] always valid, [1] = -1 on the boundary (#faces x 2).
+  std::vector<std::array<Index, 2>> face_tets;
+  /// Face index of each tet's local face k (#tets x 4).
+  std::vector<std::array<Index, 4>> tet_faces;
+  /// Faces shared by more than two tets (non-manifold); their extra tets are listed here as
+  /// (face, tet) pairs and not in face_tets.
+  std::vector<std::array<Index, 2>> overshared;
+
+  [[nodiscard]] Index num_faces() const { return static_cast<Index>(faces.size()); }
+  [[nodiscard]] bool is_boundary(Index f) const { return face_tets[f][1] < 0; }
+  /// The tet across local face k of tet e, or -1 on the boundary.
+  [[nodiscard]] Index neighbor(Index e, int k) const {
+    const auto& ft = face_tets[tet_faces[e][k]];
+    return ft[0] == e ? ft[1] : ft[0];
+  }
+};
+
+/// Unique faces, deterministic order (sorted by their sorted corner indices).
+TetFaces compute_faces(const TetMesh& mesh);
+
+/// A triangle surface: positions indexed by triangles.
+struct TriSurface {
+  std::vector<Vec3> positions;       ///< (#vertices)
+  std::vector<TriIndices> triangles; ///< outward oriented (#triangles)
+  std::vector<Index> vertex_node;    ///< tet-mesh node of each vertex (#vertices)
+  std::vector<Index> triangle_tet;   ///< tet each triangle bounds (#triangles)
+};
+
+/// The boundary faces of the mesh as outward-oriented triangles, with only the boundary nodes as
+/// vertices (in increasing node order).
+TriSurface boundary_surface(const TetMesh& mesh, const TetFaces& faces);
+TriSurface boundary_surface(const TetMesh& mesh);
+
+/// Connected components: tets are connected when they share a node. Returns a label per tet in
+/// [0, count); labels numbered in order of each component's lowest tet index.
+struct Components {
+  std::vector<Index> tet_component;  ///< (#tets)
+  Index count = 0;
+};
+Components connected_components(const TetMesh& mesh);
+
+}  // namespace shatter

@@ -1,0 +1,160 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "shatter/mesh/generate.h"
+#include "shatter/mesh/quality.h"
+#include "shatter/mesh/topology.h"
+#include "shatter/mesh/validate.h"
+#include "support/test_support.h"
+
+namespace shatter {
+namespace {
+
+TetMesh unit_tet() {
+  TetMesh m;
+  m.positions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
+  m.tets = {{0, 1, 2, 3}};
+  return m;
+}
+
+TEST(BoxMesh, VolumeAndOrientation) {
+  for (auto pattern : {BoxMeshDef::Pattern::six, BoxMeshDef::Pattern::five}) {
+    for (double jitter : {0.0, 0.2}) {
+      const TetMesh m = make_box_mesh({.min = Vec3(-1, 0, 0), .max = Vec3(1, 0.5, 3), .cells = {4, 3, 5},
+                                       .pattern = pattern, .jitter = jitter, .seed = 7});
+      EXPECT_EQ(m.num_nodes(), 5 * 4 * 6);
+      EXPECT_EQ(m.num_tets(), 4 * 3 * 5 * (pattern == BoxMeshDef::Pattern::six ? 6 : 5));
+      EXPECT_NEAR(total_volume(m), 2.0 * 0.5 * 3.0, 1e-12);
+      for (Index e = 0; e < m.num_tets(); ++e) EXPECT_GT(signed_volume(m, e), 0.0);
+      const ValidationReport report = validate_mesh(m);
+      EXPECT_TRUE(report.problems.empty()) << report.problems.front().message;
+      // Conforming: the boundary is exactly the box surface, 2 triangles per boundary cell face.
+      const TriSurface s = boundary_surface(m);
+      EXPECT_EQ(s.triangles.size(), 2u * 2u * (4 * 3 + 3 * 5 + 4 * 5));
+      EXPECT_EQ(connected_components(m).count, 1);
+    }
+  }
+}
+
+TEST(Topology, BoundaryIsClosedAndOutward) {
+  const TetMesh m = make_box_mesh({.cells = {3, 3, 3}, .jitter = 0.15});
+  const TriSurface s = boundary_surface(m);
+  // Divergence theorem: sum over triangles of (centroid . normal) * area / 3 = volume.
+  double v = 0;
+  for (const TriIndices& t : s.triangles) {
+    const Vec3 &a = s.positions[t[0]], &b = s.positions[t[1]], &c = s.positions[t[2]];
+    v += a.dot(b.cross(c)) / 6.0;
+  }
+  EXPECT_NEAR(v, 1.0, 1e-12);
+  // Closed 2-manifold: every directed edge appears once, its reverse once.
+  std::map<std::pair<Index, Index>, int> edges;
+  for (const TriIndices& t : s.triangles)
+    for (int k = 0; k < 3; ++k) ++edges[{t[k], t[(k + 1) % 3]}];
+  for (const auto& [e, n] : edges) {
+    EXPECT_EQ(n, 1);
+    EXPECT_EQ(edges.count({e.second, e.first}), 1u);
+  }
+}
+
+TEST(Topology, NeighborsAreSymmetric) {
+  const TetMesh m = make_box_mesh({.cells = {2, 2, 2}});
+  const TetFaces f = compute_faces(m);
+  for (Index e = 0; e < m.num_tets(); ++e)
+    for (int k = 0; k < 4; ++k) {
+      const Index n = f.neighbor(e, k);
+      if (n < 0) continue;
+      bool back = false;
+      for (int l = 0; l < 4; ++l) back |= f.neighbor(n, l) == e;
+      EXPECT_TRUE(back);
+    }
+  EXPECT_TRUE(f.overshared.empty());
+}
+
+TEST(Components, SeparatesDisjointParts) {
+  TetMesh m = unit_tet();
+  m.positions.push_back(Vec3(5, 0, 0));
+  m.positions.push_back(Vec3(6, 0, 0));
+  m.positions.push_back(Vec3(5, 1, 0));
+  m.positions.push_back(Vec3(5, 0, 1));
+  m.tets.push_back({4, 5, 6, 7});
+  const Components c = connected_components(m);
+  EXPECT_EQ(c.count, 2);
+  EXPECT_EQ(c.tet_component[0], 0);
+  EXPECT_EQ(c.tet_component[1], 1);
+}
+
+TEST(Validate, FindsEveryProblemWithIds) {
+  TetMesh m = unit_tet();
+  m.node_ids = {10, 20, 30, 40};
+  m.tet_ids = {100};
+  m.positions.push_back(Vec3(std::nan(""), 0, 0));  // unreferenced and NaN
+  m.node_ids.push_back(50);
+  m.tets.push_back({0, 1, 2, 9});  // out of range
+  m.tet_ids.push_back(101);
+  m.tets.push_back({0, 1, 1, 3});  // repeated
+  m.tet_ids.push_back(102);
+  m.tets.push_back({0, 2, 1, 3});  // inverted
+  m.tet_ids.push_back(103);
+  const ValidationReport r = validate_mesh(m);
+  EXPECT_EQ(r.count(MeshProblemKind::node_not_finite), 1u);
+  EXPECT_EQ(r.count(MeshProblemKind::index_out_of_range), 1u);
+  EXPECT_EQ(r.count(MeshProblemKind::repeated_node), 1u);
+  EXPECT_EQ(r.count(MeshProblemKind::inverted_tet), 1u);
+  EXPECT_EQ(r.count(MeshProblemKind::unreferenced_node), 1u);
+  bool named = false;
+  for (const MeshProblem& p : r.problems) named |= p.message.find("tet 101") != std::string::npos;
+  EXPECT_TRUE(named);
+  EXPECT_TRUE(r.has_errors());
+}
+
+TEST(Validate, RepairsOrientationWithWarning) {
+  TetMesh m = unit_tet();
+  std::swap(m.tets[0][0], m.tets[0][1]);
+  test::ExpectWarnings w;
+  ASSERT_OK(check_and_repair(m, "x.msh"));
+  EXPECT_GT(signed_volume(m, 0), 0);
+  ASSERT_EQ(w.messages().size(), 1u);
+  EXPECT_NE(w.messages()[0].find("reoriented 1"), std::string::npos);
+}
+
+TEST(Validate, DegenerateAndOversharedAreErrors) {
+  TetMesh m = unit_tet();
+  m.positions.push_back(Vec3(0.5, 0.5, 0));  // coplanar with face 0-1-2
+  m.tets.push_back({0, 1, 2, 4});
+  EXPECT_EQ(validate_mesh(m).count(MeshProblemKind::degenerate_tet), 1u);
+  TetMesh o = unit_tet();
+  o.positions.push_back(Vec3(0, 0, -1));
+  o.positions.push_back(Vec3(0.2, 0.2, -2));
+  o.tets.push_back({0, 2, 1, 4});
+  o.tets.push_back({0, 2, 1, 5});
+  EXPECT_EQ(validate_mesh(o).count(MeshProblemKind::overshared_face), 1u);
+}
+
+TEST(Quality, RegularTetIsIdeal) {
+  Mat34 x;
+  x.col(0) = Vec3(1, 1, 1);
+  x.col(1) = Vec3(1, -1, -1);
+  x.col(2) = Vec3(-1, 1, -1);
+  x.col(3) = Vec3(-1, -1, 1);
+  EXPECT_NEAR(aspect_ratio(x), 1.0, 1e-12);
+  for (double a : dihedral_angles(x)) EXPECT_NEAR(a, std::acos(1.0 / 3.0), 1e-12);
+  const auto right = dihedral_angles(unit_tet().corners(0));
+  // Right-corner tet: three 90-degree angles at the axes' edges.
+  EXPECT_NEAR(right[0], M_PI / 2, 1e-12);
+  EXPECT_NEAR(right[1], M_PI / 2, 1e-12);
+  EXPECT_NEAR(right[2], M_PI / 2, 1e-12);
+}
+
+TEST(ExtractTets, KeepsIdsAndSets) {
+  TetMesh m = make_box_mesh({.cells = {2, 1, 1}});
+  m.tet_sets["right"] = {6, 7};
+  const TetMesh sub = extract_tets(m, {6, 7, 8});
+  EXPECT_EQ(sub.num_tets(), 3);
+  EXPECT_EQ(sub.tet_sets.at("right"), (std::vector<Index>{0, 1}));
+  for (Index e = 0; e < 3; ++e) EXPECT_EQ(sub.corners(e), m.corners(6 + e));
+}
+
+}  // namespace
+}  // namespace shatter
