@@ -5,9 +5,9 @@ pkg_check_modules(XXHASH REQUIRED IMPORTED_TARGET libxxhash)
 if(SHATTER_USE_OPENMP)
   find_package(OpenMP REQUIRED COMPONENTS CXX)
 endif()
+find_package(nlohmann_json 3.10 REQUIRED)  # shape, case and scene files
 if(SHATTER_BUILD_APPS OR SHATTER_BUILD_TESTS)
   find_package(CLI11 REQUIRED)
-  find_package(nlohmann_json 3.10 REQUIRED)
   find_package(fmt REQUIRED)
 endif()
 if(SHATTER_BUILD_TESTS)
@@ -23,7 +23,7 @@ target_compile_features(shatter_options INTERFACE cxx_std_20)
 # Determinism: no fused multiply-add contraction, no fast-math.
 target_compile_options(shatter_options INTERFACE -ffp-contract=off -fno-fast-math)
 target_compile_options(shatter_options INTERFACE -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor
-  -Wcast-align -Woverloaded-virtual -Wnull-dereference
+  -Wcast-align -Woverloaded-virtual
   -Wno-missing-field-initializers)  # designated initializers of "def" structs leave the rest defaulted
 if(SHATTER_WERROR)
   target_compile_options(shatter_options INTERFACE -Werror)

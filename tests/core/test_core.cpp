@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
 #include "shatter/core/error.h"
 #include "shatter/core/file_io.h"
@@ -47,6 +48,11 @@ TEST(Hash, StableAndSensitive) {
   Hasher h;
   h.add(std::span<const double>(v, 3));
   EXPECT_EQ(h.digest(), hash_bytes(v, sizeof v));
+  // A span over mutable data hashes its elements too, not the span object.
+  std::vector<double> copy(v, v + 3);
+  Hasher g;
+  g.add(std::span(copy));
+  EXPECT_EQ(g.digest(), h.digest());
   const double w[3] = {1.0, 2.0, 3.0000000000000004};
   EXPECT_NE(hash_bytes(v, sizeof v), hash_bytes(w, sizeof w));
 }

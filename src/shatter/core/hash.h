@@ -13,6 +13,11 @@ namespace shatter {
 
 /// Streaming 64-bit hash. Feed values in a fixed order; digest() may be called at any time.
 class Hasher {
+  template <class T>
+  struct is_span : std::false_type {};
+  template <class T, std::size_t N>
+  struct is_span<std::span<T, N>> : std::true_type {};
+
  public:
   explicit Hasher(std::uint64_t seed = 0);
   ~Hasher();
@@ -20,12 +25,13 @@ class Hasher {
   Hasher& operator=(const Hasher&) = delete;
 
   void add_bytes(const void* data, std::size_t size);
+  /// The bytes of one plain value (an int, a double, an array of them).
   template <class T>
-    requires std::is_trivially_copyable_v<T>
+    requires(std::is_trivially_copyable_v<T> && !is_span<T>::value)
   void add(const T& value) { add_bytes(&value, sizeof(T)); }
-  template <class T>
-    requires std::is_trivially_copyable_v<T>
-  void add(std::span<const T> values) { add_bytes(values.data(), values.size_bytes()); }
+  /// The bytes of the elements a span views (not the span object itself).
+  template <class T, std::size_t N>
+  void add(std::span<T, N> values) { add_bytes(values.data(), values.size_bytes()); }
   void add(std::string_view s) { add_bytes(s.data(), s.size()); }
 
   [[nodiscard]] std::uint64_t digest() const;
