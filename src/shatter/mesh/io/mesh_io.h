@@ -50,9 +50,14 @@ struct MeshWriteOptions {
   MeshFields fields;                  ///< written where the format can hold them (vtu, vtk)
 };
 
-/// Read any supported volume format; the mesh is validated (inverted tets reoriented with a
-/// warning; any other error fails with the file name and ids).
-Result<MeshReadResult> read_mesh(const std::string& path);
+struct ReadMeshOptions {
+  /// Validate after parsing: inverted tets reoriented with a warning; any other problem (bad
+  /// index, degenerate tet, NaN, overshared face) fails with the file name and ids. Off: the
+  /// mesh is returned as parsed (for `shatter inspect`, which reports every problem itself).
+  bool validate = true;
+};
+/// Read any supported volume format.
+Result<MeshReadResult> read_mesh(const std::string& path, const ReadMeshOptions& options = {});
 /// Write any supported volume format by extension, atomically. For TetGen, `path` may end in
 /// .node or .ele; both files are written.
 Result<void> write_mesh(const std::string& path, const TetMesh& mesh, const MeshWriteOptions& options = {});
