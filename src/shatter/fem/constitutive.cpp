@@ -1,0 +1,130 @@
+// StVK, linear and corotated energy densities, first Piola-Kirchhoff stresses and their differentials.
+#include "shatter/fem/constitutive.h"
+
+#include <Eigen/SVD>
+
+#include <cmath>
+#include <string>
+
+namespace shatter {
+namespace {
+
+// Green strain E = (F^T F - I) / 2 (method.md §2.1).
+Mat3 green_strain(const Mat3& F) { return 0.5 * (F.transpose() * F - Mat3::Identity()); }
+
+// S = 2 mu E + lambda tr(E) I.
+Mat3 stvk_S(const Lame& l, const Mat3& E) {
+  return 2.0 * l.mu * E + l.lambda * E.trace() * Mat3::Identity();
+}
+
+// Small strain eps = (F + F^T)/2 - I.
+Mat3 small_strain(const Mat3& F) { return 0.5 * (F + F.transpose()) - Mat3::Identity(); }
+
+// dR of the polar decomposition F = R S along dF: R^T dR = [w]x with (tr(S) I - S) w =
+// axial(R^T dF - dF^T R) (Twigg & Kacic-Alesic 2010; McAdams et al. 2011).
+Mat3 polar_rotation_differential(const Polar& p, const Mat3& dF) {
+  const Mat3 A = p.R.transpose() * dF;
+  const Mat3 skew = A - A.transpose();
+  const Vec3 rhs(skew(2, 1), skew(0, 2), skew(1, 0));
+  const Mat3 G = p.S.trace() * Mat3::Identity() - p.S;
+  const Vec3 w = G.inverse() * rhs;
+  Mat3 W;
+  W << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
+  return p.R * W;
+}
+
+}  // namespace
+
+Result<ModelKind> parse_model_kind(std::string_view name) {
+  if (name == "stvk") return ModelKind::stvk;
+  if (name == "linear") return ModelKind::linear;
+  if (name == "corotated") return ModelKind::corotated;
+  return field_error("model", "unknown constitutive model '" + std::string(name) +
+                                  "'; valid: stvk, linear, corotated");
+}
+
+const char* to_string(ModelKind kind) {
+  switch (kind) {
+    case ModelKind::stvk: return "stvk";
+    case ModelKind::linear: return "linear";
+    case ModelKind::corotated: return "corotated";
+  }
+  return "?";
+}
+
+Polar polar_decomposition(const Mat3& F) {
+  const Eigen::JacobiSVD<Mat3> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Mat3 U = svd.matrixU();
+  const Mat3 V = svd.matrixV();
+  // Singular values come sorted descending; for det(U V^T) < 0 flip the smallest one's direction.
+  if ((U * V.transpose()).determinant() < 0) U.col(2) = -U.col(2);
+  Polar p;
+  p.R = U * V.transpose();
+  const Mat3 S = p.R.transpose() * F;
+  p.S = 0.5 * (S + S.transpose());
+  return p;
+}
+
+double energy_density(ModelKind kind, const Lame& l, const Mat3& F) {
+  switch (kind) {
+    case ModelKind::stvk: {
+      // psi = mu tr(E^2) + lambda/2 tr(E)^2
+      const Mat3 E = green_strain(F);
+      const double tr = E.trace();
+      return l.mu * E.squaredNorm() + 0.5 * l.lambda * tr * tr;
+    }
+    case ModelKind::linear: {
+      const Mat3 e = small_strain(F);
+      const double tr = e.trace();
+      return l.mu * e.squaredNorm() + 0.5 * l.lambda * tr * tr;
+    }
+    case ModelKind::corotated: {
+      // psi = mu |F - R|^2 + lambda/2 tr(S - I)^2
+      const Polar p = polar_decomposition(F);
+      const double tr = p.S.trace() - 3.0;
+      return l.mu * (F - p.R).squaredNorm() + 0.5 * l.lambda * tr * tr;
+    }
+  }
+  return 0;
+}
+
+Mat3 first_piola(ModelKind kind, const Lame& l, const Mat3& F) {
+  switch (kind) {
+    case ModelKind::stvk:
+      return F * stvk_S(l, green_strain(F));  // P = F S
+    case ModelKind::linear: {
+      const Mat3 e = small_strain(F);
+      return 2.0 * l.mu * e + l.lambda * e.trace() * Mat3::Identity();
+    }
+    case ModelKind::corotated: {
+      // P = 2 mu (F - R) + lambda tr(S - I) R
+      const Polar p = polar_decomposition(F);
+      return 2.0 * l.mu * (F - p.R) + l.lambda * (p.S.trace() - 3.0) * p.R;
+    }
+  }
+  return Mat3::Zero();
+}
+
+Mat3 first_piola_differential(ModelKind kind, const Lame& l, const Mat3& F, const Mat3& dF) {
+  switch (kind) {
+    case ModelKind::stvk: {
+      // dP = dF S + F dS, dS = 2 mu dE + lambda tr(dE) I, dE = (dF^T F + F^T dF)/2
+      const Mat3 S = stvk_S(l, green_strain(F));
+      const Mat3 dE = 0.5 * (dF.transpose() * F + F.transpose() * dF);
+      return dF * S + F * stvk_S(l, dE);
+    }
+    case ModelKind::linear:
+      // dP = mu (dF + dF^T) + lambda tr(dF) I
+      return l.mu * (dF + dF.transpose()) + l.lambda * dF.trace() * Mat3::Identity();
+    case ModelKind::corotated: {
+      // dP = 2 mu dF + lambda tr(R^T dF) R + (lambda tr(S - I) - 2 mu) dR
+      const Polar p = polar_decomposition(F);
+      const Mat3 dR = polar_rotation_differential(p, dF);
+      return 2.0 * l.mu * dF + l.lambda * (p.R.transpose() * dF).trace() * p.R +
+             (l.lambda * (p.S.trace() - 3.0) - 2.0 * l.mu) * dR;
+    }
+  }
+  return Mat3::Zero();
+}
+
+}  // namespace shatter

@@ -1,0 +1,289 @@
+// FemModel construction and the global internal force: a straightforward reference and a fast path
+// (QR-rotated rest frames, specialised StVK code, fixed blocks with a deterministic gather).
+#include "shatter/fem/fem_model.h"
+
+#include <Eigen/QR>
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+
+#include "shatter/core/parallel.h"
+
+namespace shatter {
+namespace {
+
+constexpr std::int64_t kBlockSize = 1024;  // tets per block; fixed so results ignore thread count
+
+// Upper-triangular R of Dm = Q^T R (Householder QR), returned as the 6 entries of R^-1.
+std::array<double, 6> rotated_rest_inverse(const TetRest& rest) {
+  const Mat3 Dm = rest.Dm_inv.inverse();
+  const Eigen::HouseholderQR<Mat3> qr(Dm);
+  const Mat3 R = qr.matrixQR().triangularView<Eigen::Upper>();
+  const Mat3 Rinv = R.triangularView<Eigen::Upper>().solve(Mat3::Identity());
+  return {Rinv(0, 0), Rinv(0, 1), Rinv(0, 2), Rinv(1, 1), Rinv(1, 2), Rinv(2, 2)};
+}
+
+void store_fast_rest(FemModel& model, std::size_t e) {
+  const TetRest& r = model.rest[e];
+  const std::array<double, 6> ri = rotated_rest_inverse(r);
+  double* group = model.fast.packed.data() + 7 * (e / 4 * 4) + e % 4;
+  for (int c = 0; c < 6; ++c) group[4 * c] = ri[static_cast<std::size_t>(c)];
+  group[24] = r.volume;
+}
+
+void build_blocks(FemModel& model) {
+  FastTetData& fd = model.fast;
+  const std::int64_t n_tets = model.num_tets();
+  fd.block_size = kBlockSize;
+  const std::int64_t n_blocks = (n_tets + kBlockSize - 1) / kBlockSize;
+  fd.corner_slot.assign(static_cast<std::size_t>(4 * n_tets), 0);
+  fd.block_slot_begin.assign(static_cast<std::size_t>(n_blocks + 1), 0);
+  std::vector<std::int64_t> slot_node;  // node of each global slot
+  std::vector<std::int32_t> local(static_cast<std::size_t>(model.num_nodes), -1);
+  for (std::int64_t b = 0; b < n_blocks; ++b) {
+    const std::int64_t begin = static_cast<std::int64_t>(slot_node.size());
+    fd.block_slot_begin[static_cast<std::size_t>(b)] = begin;
+    const std::int64_t lo = b * kBlockSize, hi = std::min(n_tets, lo + kBlockSize);
+    // Slots in order of first appearance in the block's tets.
+    for (std::int64_t e = lo; e < hi; ++e) {
+      for (int k = 0; k < 4; ++k) {
+        const Index n = model.tets[static_cast<std::size_t>(e)][k];
+        if (local[n] < 0) {
+          local[n] = static_cast<std::int32_t>(static_cast<std::int64_t>(slot_node.size()) - begin);
+          slot_node.push_back(n);
+        }
+        fd.corner_slot[static_cast<std::size_t>(4 * e + k)] = 3 * local[n];
+      }
+    }
+    for (std::int64_t s = begin; s < static_cast<std::int64_t>(slot_node.size()); ++s)
+      local[static_cast<std::size_t>(slot_node[static_cast<std::size_t>(s)])] = -1;
+  }
+  fd.block_slot_begin[static_cast<std::size_t>(n_blocks)] = static_cast<std::int64_t>(slot_node.size());
+  // Node -> slots, in block order (slots are numbered block by block).
+  fd.node_entry_begin.assign(static_cast<std::size_t>(model.num_nodes) + 1, 0);
+  for (std::int64_t n : slot_node) ++fd.node_entry_begin[static_cast<std::size_t>(n) + 1];
+  for (std::size_t i = 1; i < fd.node_entry_begin.size(); ++i) fd.node_entry_begin[i] += fd.node_entry_begin[i - 1];
+  fd.node_entry_slot.assign(slot_node.size(), 0);
+  std::vector<std::int64_t> fill(fd.node_entry_begin.begin(), fd.node_entry_begin.end() - 1);
+  for (std::size_t s = 0; s < slot_node.size(); ++s)
+    fd.node_entry_slot[static_cast<std::size_t>(fill[static_cast<std::size_t>(slot_node[s])]++)] =
+        static_cast<std::int64_t>(s);
+}
+
+// Four tets at a time: every double below holds one value per lane (GCC vector extension; with
+// -ffp-contract=off each lane is computed exactly as the scalar formula would be, so the SSE2 and AVX2
+// versions give the same bits).
+// Vectors only live inside stvk_forces_block (load_lanes is always inlined), so none crosses a call;
+// -Wpsabi warns about the call ABI of such vectors.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+typedef double Lanes __attribute__((vector_size(4 * sizeof(double))));
+
+__attribute__((always_inline)) inline Lanes load_lanes(const double* p) {
+  Lanes v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+}  // namespace
+
+namespace detail {
+
+// StVK forces of the tets [lo, hi) of one block (lo a multiple of 4) in their QR-rotated rest frames
+// (method.md §2.1-2.2, §3): F' = Ds R^-1, S' = 2 mu E' + lambda tr(E') I, H = V F' S' R^-T,
+// [f1 f2 f3] = H, f0 = -(f1 + f2 + f3); added into the block's slots in tet order.
+__attribute__((target_clones("avx2", "default")))
+void stvk_forces_block(const double* packed, const TetIndices* tets, const std::int32_t* corner_slot,
+                       const Vec3* x, std::int64_t lo, std::int64_t hi, double mu, double lambda,
+                       double* slots) {
+  for (std::int64_t g0 = lo; g0 < hi; g0 += 4) {
+    const int lanes = static_cast<int>(std::min<std::int64_t>(4, hi - g0));
+    // Gather Ds = [x1 - x0, x2 - x0, x3 - x0] per lane (built in registers: no store-to-load
+    // forwarding stalls).
+    const Vec3* c[4][4];  // [lane][corner]
+    for (int l = 0; l < 4; ++l) {
+      const TetIndices& t = tets[g0 + (l < lanes ? l : 0)];
+      for (int k = 0; k < 4; ++k) c[l][k] = &x[t[k]];
+    }
+#define SHATTER_EDGE(k, a)                                                    \
+  Lanes{(*c[0][k])[a] - (*c[0][0])[a], (*c[1][k])[a] - (*c[1][0])[a], \
+        (*c[2][k])[a] - (*c[2][0])[a], (*c[3][k])[a] - (*c[3][0])[a]}
+    const double* r = packed + 7 * g0;  // 7 lane vectors per group of 4 tets
+    const Lanes r00 = load_lanes(r), r01 = load_lanes(r + 4), r02 = load_lanes(r + 8),
+                r11 = load_lanes(r + 12), r12 = load_lanes(r + 16), r22 = load_lanes(r + 20),
+                vol = load_lanes(r + 24);
+    const Lanes d0x = SHATTER_EDGE(1, 0), d0y = SHATTER_EDGE(1, 1), d0z = SHATTER_EDGE(1, 2);
+    const Lanes d1x = SHATTER_EDGE(2, 0), d1y = SHATTER_EDGE(2, 1), d1z = SHATTER_EDGE(2, 2);
+    const Lanes d2x = SHATTER_EDGE(3, 0), d2y = SHATTER_EDGE(3, 1), d2z = SHATTER_EDGE(3, 2);
+#undef SHATTER_EDGE
+    // F' columns a, b, c.
+    const Lanes ax = d0x * r00, ay = d0y * r00, az = d0z * r00;
+    const Lanes bx = d0x * r01 + d1x * r11, by = d0y * r01 + d1y * r11, bz = d0z * r01 + d1z * r11;
+    const Lanes cx = d0x * r02 + d1x * r12 + d2x * r22, cy = d0y * r02 + d1y * r12 + d2y * r22,
+                cz = d0z * r02 + d1z * r12 + d2z * r22;
+    // C = F'^T F'.
+    const Lanes caa = ax * ax + ay * ay + az * az, cbb = bx * bx + by * by + bz * bz,
+                ccc = cx * cx + cy * cy + cz * cz;
+    const Lanes cab = ax * bx + ay * by + az * bz, cac = ax * cx + ay * cy + az * cz,
+                cbc = bx * cx + by * cy + bz * cz;
+    // V S' = V (mu (C - I) + lambda/2 (tr C - 3) I).
+    const Lanes vmu = vol * mu, vlh = vol * (0.5 * lambda);
+    const Lanes ltr = vlh * (caa + cbb + ccc - 3.0);
+    const Lanes shift = ltr - vmu;
+    const Lanes saa = vmu * caa + shift, sbb = vmu * cbb + shift, scc = vmu * ccc + shift;
+    const Lanes sab = vmu * cab, sac = vmu * cac, sbc = vmu * cbc;
+    // F' (V S'), columns p, q, s.
+    const Lanes px = ax * saa + bx * sab + cx * sac, py = ay * saa + by * sab + cy * sac,
+                pz = az * saa + bz * sab + cz * sac;
+    const Lanes qx = ax * sab + bx * sbb + cx * sbc, qy = ay * sab + by * sbb + cy * sbc,
+                qz = az * sab + bz * sbb + cz * sbc;
+    const Lanes sx = ax * sac + bx * sbc + cx * scc, sy = ay * sac + by * sbc + cy * scc,
+                sz = az * sac + bz * sbc + cz * scc;
+    // H = F' V S' R^-T; f0 = -(f1 + f2 + f3).
+    const Lanes f1x = px * r00 + qx * r01 + sx * r02, f1y = py * r00 + qy * r01 + sy * r02,
+                f1z = pz * r00 + qz * r01 + sz * r02;
+    const Lanes f2x = qx * r11 + sx * r12, f2y = qy * r11 + sy * r12, f2z = qz * r11 + sz * r12;
+    const Lanes f3x = sx * r22, f3y = sy * r22, f3z = sz * r22;
+    const Lanes out[12] = {-(f1x + f2x + f3x), -(f1y + f2y + f3y), -(f1z + f2z + f3z),
+                           f1x, f1y, f1z, f2x, f2y, f2z, f3x, f3y, f3z};
+    // Scatter in tet order.
+    for (int l = 0; l < lanes; ++l) {
+      const std::int32_t* cs = corner_slot + 4 * (g0 + l);
+      for (int k = 0; k < 4; ++k) {
+        double* s = slots + cs[k];
+        s[0] += out[3 * k][l];
+        s[1] += out[3 * k + 1][l];
+        s[2] += out[3 * k + 2][l];
+      }
+    }
+  }
+}
+
+}  // namespace detail
+#pragma GCC diagnostic pop
+
+namespace {
+
+}  // namespace
+
+FemModel make_fem_model(const TetMesh& rest_mesh, const Material& material, ModelKind kind) {
+  FemModel model;
+  model.model = kind;
+  model.material = material;
+  model.lame = lame_parameters(material);
+  model.tets = rest_mesh.tets;
+  model.num_nodes = rest_mesh.num_nodes();
+  const std::size_t n_tets = model.tets.size();
+  model.rest.resize(n_tets);
+  model.node_mass.assign(static_cast<std::size_t>(model.num_nodes), 0.0);
+  model.fast.packed.assign(7 * ((n_tets + 3) / 4 * 4), 0.0);
+  for (std::size_t e = 0; e < n_tets; ++e) {
+    const TetRest r = tet_rest(rest_mesh.corners(static_cast<Index>(e)));
+    model.rest[e] = r;
+    const double m = material.density * r.volume / 4.0;  // lumped: rho V / 4 per corner
+    for (Index n : model.tets[e]) model.node_mass[static_cast<std::size_t>(n)] += m;
+    store_fast_rest(model, e);
+  }
+  build_blocks(model);
+  return model;
+}
+
+void set_tet_rest(FemModel& model, Index e, const Mat34& rest_corners) {
+  SHATTER_CHECK(e >= 0 && e < model.num_tets());
+  model.rest[static_cast<std::size_t>(e)] = tet_rest(rest_corners);
+  store_fast_rest(model, static_cast<std::size_t>(e));
+}
+
+void internal_forces_reference(const FemModel& model, const std::vector<Vec3>& x, std::vector<Vec3>& f) {
+  SHATTER_CHECK(static_cast<Index>(x.size()) == model.num_nodes);
+  f.assign(x.size(), Vec3::Zero());
+  for (std::size_t e = 0; e < model.tets.size(); ++e) {
+    const TetIndices& t = model.tets[e];
+    Mat34 xe;
+    for (int k = 0; k < 4; ++k) xe.col(k) = x[static_cast<std::size_t>(t[k])];
+    const Mat34 fe = tet_internal_forces(model.model, model.lame, model.rest[e], xe);
+    for (int k = 0; k < 4; ++k) f[static_cast<std::size_t>(t[k])] += fe.col(k);
+  }
+}
+
+void internal_forces(const FemModel& model, const std::vector<Vec3>& x, std::vector<Vec3>& f) {
+  SHATTER_CHECK(static_cast<Index>(x.size()) == model.num_nodes);
+  const FastTetData& fd = model.fast;
+  const std::int64_t n_tets = model.num_tets();
+  const std::int64_t n_blocks = static_cast<std::int64_t>(fd.block_slot_begin.size()) - 1;
+  thread_local std::vector<double> scratch;  // 3 doubles per slot, N
+  const std::size_t n_slots = static_cast<std::size_t>(fd.block_slot_begin.back());
+  if (scratch.size() < 3 * n_slots) scratch.resize(3 * n_slots);
+  double* acc = scratch.data();
+  const Vec3* xp = x.data();
+  // 1. Per block, in tet order: tet forces added into the block's own slots.
+  parallel_for(0, n_blocks, [&](std::int64_t b) {
+    double* slots = acc + 3 * fd.block_slot_begin[static_cast<std::size_t>(b)];
+    const std::int64_t n_block_slots = fd.block_slot_begin[static_cast<std::size_t>(b) + 1] -
+                                       fd.block_slot_begin[static_cast<std::size_t>(b)];
+    std::fill(slots, slots + 3 * n_block_slots, 0.0);
+    const std::int64_t lo = b * fd.block_size, hi = std::min(n_tets, lo + fd.block_size);
+    if (model.model == ModelKind::stvk) {
+      detail::stvk_forces_block(fd.packed.data(), model.tets.data(), fd.corner_slot.data(), xp, lo, hi,
+                                model.lame.mu, model.lame.lambda, slots);
+      return;
+    }
+    for (std::int64_t e = lo; e < hi; ++e) {
+      const TetIndices& t = model.tets[static_cast<std::size_t>(e)];
+      Mat34 xe;
+      for (int k = 0; k < 4; ++k) xe.col(k) = xp[t[k]];
+      const Mat34 fe = tet_internal_forces(model.model, model.lame, model.rest[static_cast<std::size_t>(e)], xe);
+      for (int k = 0; k < 4; ++k) {
+        double* s = slots + fd.corner_slot[static_cast<std::size_t>(4 * e + k)];
+        s[0] += fe(0, k);
+        s[1] += fe(1, k);
+        s[2] += fe(2, k);
+      }
+    }
+  }, 2);
+  // 2. Per node: its slots' sums in block order.
+  f.resize(x.size());
+  parallel_for(0, model.num_nodes, [&](std::int64_t n) {
+    double sx = 0, sy = 0, sz = 0;
+    for (std::int64_t i = fd.node_entry_begin[static_cast<std::size_t>(n)];
+         i < fd.node_entry_begin[static_cast<std::size_t>(n) + 1]; ++i) {
+      const double* s = acc + 3 * fd.node_entry_slot[static_cast<std::size_t>(i)];
+      sx += s[0];
+      sy += s[1];
+      sz += s[2];
+    }
+    f[static_cast<std::size_t>(n)] = Vec3(sx, sy, sz);
+  });
+}
+
+double total_energy(const FemModel& model, const std::vector<Vec3>& x) {
+  SHATTER_CHECK(static_cast<Index>(x.size()) == model.num_nodes);
+  const std::int64_t n_tets = model.num_tets();
+  if (model.model == ModelKind::stvk) {
+    // V (mu tr(E'^2) + lambda/2 tr(E')^2) with E' = (F'^T F' - I)/2 and F' = Ds R^-1 (rotated rest
+    // frame, see FastTetData).
+    const double* packed = model.fast.packed.data();
+    const double mu = model.lame.mu, half_lambda = 0.5 * model.lame.lambda;
+    return parallel_sum(0, n_tets, 0.0, [&](std::int64_t e) {
+      const TetIndices& t = model.tets[static_cast<std::size_t>(e)];
+      const double* r = packed + 7 * (e / 4 * 4) + e % 4;
+      const double r00 = r[0], r01 = r[4], r02 = r[8], r11 = r[12], r12 = r[16], r22 = r[20];
+      const Vec3 d0 = x[t[1]] - x[t[0]], d1 = x[t[2]] - x[t[0]], d2 = x[t[3]] - x[t[0]];
+      const Vec3 a = d0 * r00, b = d0 * r01 + d1 * r11, c = d0 * r02 + d1 * r12 + d2 * r22;
+      const double eaa = 0.5 * (a.dot(a) - 1.0), ebb = 0.5 * (b.dot(b) - 1.0), ecc = 0.5 * (c.dot(c) - 1.0);
+      const double eab = 0.5 * a.dot(b), eac = 0.5 * a.dot(c), ebc = 0.5 * b.dot(c);
+      const double tr = eaa + ebb + ecc;
+      const double e2 = eaa * eaa + ebb * ebb + ecc * ecc + 2.0 * (eab * eab + eac * eac + ebc * ebc);
+      return r[24] * (mu * e2 + half_lambda * tr * tr);
+    });
+  }
+  return parallel_sum(0, n_tets, 0.0, [&](std::int64_t e) {
+    const TetIndices& t = model.tets[static_cast<std::size_t>(e)];
+    Mat34 xe;
+    for (int k = 0; k < 4; ++k) xe.col(k) = x[static_cast<std::size_t>(t[k])];
+    return tet_energy(model.model, model.lame, model.rest[static_cast<std::size_t>(e)], xe);
+  });
+}
+
+}  // namespace shatter

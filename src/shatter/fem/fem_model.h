@@ -1,0 +1,66 @@
+// FemModel: what never changes during a solve (material, tets, rest data, masses, acceleration data)
+// and the global internal force / energy of a deformed state (method.md §2.2, eq. 12-13; §3).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "shatter/core/types.h"
+#include "shatter/fem/constitutive.h"
+#include "shatter/fem/material.h"
+#include "shatter/fem/tet_kernels.h"
+#include "shatter/mesh/tet_mesh.h"
+
+namespace shatter {
+
+/// Compact per-tet data for the accelerated force path. The rest frame of each tet is rotated
+/// (Q from a QR decomposition, Dm = Q^T R) so that Dm^-1 = R^-1 is upper triangular: F' = Ds R^-1
+/// needs 18 multiplications instead of 27, and so does the force product. Energy and forces do not
+/// depend on this rotation of the material frame (F' = F Q^T, S' = Q S Q^T, P' Dm'^-T = P Dm^-T).
+struct FastTetData {
+  /// Per group of 4 consecutive tets, 7 rows of 4 lanes: R^-1 entries r00 r01 r02 r11 r12 r22 (1/m)
+  /// and the rest volume V (m^3); padding lanes are 0 (#groups x 7 x 4).
+  std::vector<double> packed;
+  /// Fixed blocks of tets (independent of the thread count). Each block accumulates its tets'
+  /// forces into its own compact node buffer in tet order; nodes then gather their entries.
+  std::int64_t block_size = 0;                  ///< tets per block
+  std::vector<std::int32_t> corner_slot;        ///< 3 x block-local node slot of each corner, i.e. the
+                                                ///< offset of its x component (#tets x 4)
+  std::vector<std::int64_t> block_slot_begin;   ///< first slot of each block in the global slot
+                                                ///< array (#blocks + 1)
+  std::vector<std::int64_t> node_entry_begin;   ///< CSR into node_entry_slot (#nodes + 1)
+  std::vector<std::int64_t> node_entry_slot;    ///< global slot indices per node, in block order
+};
+
+struct FemModel {
+  ModelKind model = ModelKind::stvk;
+  Material material;
+  Lame lame;
+  std::vector<TetIndices> tets;     ///< node indices per tet (#tets)
+  std::vector<TetRest> rest;        ///< rest data per tet (#tets)
+  std::vector<double> node_mass;    ///< lumped mass, kg (#nodes): each tet gives rho V / 4 per corner
+  Index num_nodes = 0;
+  FastTetData fast;                 ///< acceleration data for internal_forces
+
+  [[nodiscard]] Index num_tets() const { return static_cast<Index>(tets.size()); }
+};
+
+/// Builds the model from the rest mesh (positively oriented tets). The material is not validated
+/// here (see validate_material).
+FemModel make_fem_model(const TetMesh& rest_mesh, const Material& material, ModelKind model);
+
+/// Replace the rest shape of tet e (plasticity: m := x, method.md §2.4): updates rest[e] and the
+/// fast path's data; node masses are kept (mass is conserved). Changing `tets` needs a new model.
+void set_tet_rest(FemModel& model, Index e, const Mat34& rest_corners);
+
+/// Global internal force F(x) = sum_e F_e(x), N (#nodes), the straightforward way: per tet
+/// tet_internal_forces and a serial scatter-add in tet order. x: deformed positions, m (#nodes).
+void internal_forces_reference(const FemModel& model, const std::vector<Vec3>& x,
+                               std::vector<Vec3>& f);
+/// The same, fast: specialised inline code per model kind, compact rest data, multithreaded; the
+/// result does not depend on the thread count (bitwise) and equals the reference to round-off.
+void internal_forces(const FemModel& model, const std::vector<Vec3>& x, std::vector<Vec3>& f);
+/// Total elastic energy sum_e V_e psi(F_e), J (deterministic parallel sum).
+double total_energy(const FemModel& model, const std::vector<Vec3>& x);
+
+}  // namespace shatter

@@ -1,0 +1,46 @@
+// Materials: physical constants of a solid (SI units) and named presets with handbook values
+// (sources in docs/materials.md).
+#pragma once
+
+#include <limits>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "shatter/core/error.h"
+
+namespace shatter {
+
+inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+struct Material {
+  std::string name;             ///< preset name or "custom"
+  double youngs_modulus = 0;    ///< E, Pa
+  double poisson_ratio = 0;     ///< nu, in (-1, 0.5)
+  double density = 0;           ///< kg/m^3
+  double tensile_strength = 0;  ///< Pa (ultimate tensile strength); +inf = never cracks
+  double yield_stress = 0;      ///< Pa (von Mises); +inf = perfectly elastic (brittle)
+  double fracture_toughness = kInfinity;  ///< K_Ic, Pa*sqrt(m); +inf = not known / not used
+};
+
+/// Lamé constants, Pa.
+struct Lame {
+  double mu = 0;
+  double lambda = 0;
+};
+
+/// mu = E / (2(1+nu)), lambda = E nu / ((1+nu)(1-2nu))  (method.md §2.1).
+Lame lame_parameters(const Material& m);
+
+/// Checks the fields: E > 0 and finite, nu in (-1, 0.5), density > 0 and finite, strengths > 0
+/// (may be +inf), no NaN. The error's field names the offending member ("youngs_modulus", ...).
+Result<void> validate_material(const Material& m);
+
+/// A named preset ("glass", "porcelain", "steel", ...). Unknown names give an error listing the
+/// valid ones.
+Result<Material> material_preset(std::string_view name);
+
+/// Names of all presets, in a fixed order.
+std::vector<std::string> material_preset_names();
+
+}  // namespace shatter

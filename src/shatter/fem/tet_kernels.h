@@ -1,0 +1,60 @@
+// Constant-strain tetrahedron kernels (method.md §2.2-2.3) as pure functions of the rest data and the
+// deformed corners; stress analysis helpers (Cauchy stress, principal stresses, von Mises).
+#pragma once
+
+#include "shatter/core/types.h"
+#include "shatter/fem/constitutive.h"
+
+namespace shatter {
+
+/// Rest data of one tet with corners m0..m3: Dm = [m1-m0, m2-m0, m3-m0] (columns are edges from
+/// corner 0, so det Dm = 6 V > 0 for the mesh's positive orientation), Dm_inv = Dm^-1 (1/m),
+/// volume V (m^3).
+struct TetRest {
+  Mat3 Dm_inv = Mat3::Zero();
+  double volume = 0;
+};
+/// rest_corners: 3x4, column k = corner k, m.
+TetRest tet_rest(const Mat34& rest_corners);
+
+/// Gradients of the 4 barycentric (shape) functions, 1/m: row j = grad b_j (the paper's B, the
+/// first three columns of beta). Rows sum to zero.
+Mat43 shape_gradients(const TetRest& rest);
+
+/// F = Ds Dm^-1 with Ds = [x1-x0, x2-x0, x3-x0]; x: 3x4 deformed corners, m.
+Mat3 deformation_gradient(const TetRest& rest, const Mat34& x);
+/// U_e = V psi(F), J.
+double tet_energy(ModelKind kind, const Lame& lame, const TetRest& rest, const Mat34& x);
+/// dU_e/dx_i, N (3x4, column i = corner i): the paper's F_e, the force the material needs to hold
+/// the shape (the negative of the elastic force on the nodes). [f1 f2 f3] = V P Dm^-T,
+/// f0 = -(f1 + f2 + f3).
+Mat34 tet_internal_forces(ModelKind kind, const Lame& lame, const TetRest& rest, const Mat34& x);
+/// d^2 U_e / dx^2, N/m, 12x12 with ordering [x0; x1; x2; x3], each xyz. Column 3i+a is the
+/// differential of the forces along the unit displacement of corner i in axis a. stvk and linear use
+/// a closed form per 3x3 block (exactly symmetric); corotated is built column by column from dP
+/// (symmetric to round-off). May be indefinite for stvk/corotated under compression.
+Mat12 tet_stiffness(ModelKind kind, const Lame& lame, const TetRest& rest, const Mat34& x);
+/// The same from 12 evaluations of first_piola_differential (any model; slower; a cross-check).
+Mat12 tet_stiffness_from_differential(ModelKind kind, const Lame& lame, const TetRest& rest, const Mat34& x);
+/// Symmetric part of K with negative eigenvalues clamped to 0. A K that is already positive
+/// semi-definite is returned unchanged.
+Mat12 project_psd(const Mat12& K);
+
+/// Cauchy (true) stress sigma = P F^T / det F, Pa; for the linear model the small-strain stress
+/// 2 mu eps + lambda tr(eps) I.
+Mat3 cauchy_stress(ModelKind kind, const Lame& lame, const Mat3& F);
+
+/// Eigen-decomposition of a symmetric 3x3 tensor (Pa).
+struct Principal {
+  Vec3 values;   ///< descending
+  Mat3 vectors;  ///< unit eigenvectors as columns; right-handed (det +1)
+};
+/// Cyclic Jacobi rotations: deterministic, exact when the input is diagonal (including repeated
+/// eigenvalues such as diag(a,a,b) or a*I), accurate to round-off otherwise. Sign rule: the
+/// largest-magnitude component of columns 0 and 1 is positive (first such index on ties); column 2
+/// = column 0 x column 1. Only the upper triangle of `symmetric` is read.
+Principal principal_stresses(const Mat3& symmetric);
+/// von Mises equivalent stress, Pa: sqrt(3/2 s:s) with s the deviatoric part of sigma.
+double von_mises(const Mat3& sigma);
+
+}  // namespace shatter
