@@ -1,0 +1,146 @@
+// Static solver benchmarks: stiffness refill, and the anchored impact solve of the simulator (a
+// glass slab, every node farther than r from the contact point held, a force at the contact point)
+// with each linear solver. Results and the command line: docs/solver.md.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+
+#include "shatter/fem/fem_model.h"
+#include "shatter/mesh/generate.h"
+#include "shatter/solve/static_solver.h"
+
+namespace shatter {
+namespace {
+
+Material glass() {
+  // Soda-lime glass: E 70 GPa, nu 0.22, 2500 kg/m^3.
+  return Material{.name = "glass", .youngs_modulus = 70e9, .poisson_ratio = 0.22, .density = 2500,
+                  .tensile_strength = 50e6, .yield_stress = kInfinity};
+}
+
+// Slab 0.5 x 0.1 x 0.5 m of about `tets` tets.
+TetMesh slab(std::int64_t tets) {
+  BoxMeshDef def;
+  def.max = Vec3(0.5, 0.1, 0.5);
+  def.cells = cells_for_tet_count(def.max, tets);
+  def.jitter = 0.1;
+  return make_box_mesh(def);
+}
+
+// Impact at the middle of the top face: nodes farther than r = 0.1 m held, 10 kN downward spread
+// over the nodes within 0.03 m of the contact point.
+StaticProblem impact(const TetMesh& mesh) {
+  const Vec3 contact(0.25, 0.1, 0.25);
+  const double r = 0.1, spread = 0.03;
+  StaticProblem p;
+  p.anchors.assign(mesh.positions.size(), anchor_none);
+  p.external_forces.assign(mesh.positions.size(), Vec3::Zero());
+  double weight = 0;
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+    const double d = (mesh.positions[v] - contact).norm();
+    if (d > r) p.anchors[v] = anchor_all;
+    if (d < spread) weight += spread - d;
+  }
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+    const double d = (mesh.positions[v] - contact).norm();
+    if (d < spread) p.external_forces[v] = Vec3(0, -1e4 * (spread - d) / weight, 0);
+  }
+  return p;
+}
+
+void BM_StiffnessRefill(benchmark::State& state) {
+  const TetMesh mesh = slab(state.range(0));
+  const FemModel model = make_fem_model(mesh, glass(), ModelKind::stvk);
+  std::vector<AnchorMask> anchors(mesh.positions.size(), anchor_none);
+  for (std::size_t v = 0; v < anchors.size(); ++v)
+    if (mesh.positions[v].y() == 0.0) anchors[v] = anchor_all;
+  BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, anchors);
+  for (auto _ : state) {
+    assemble_stiffness(model, mesh.positions, {}, m);
+    benchmark::DoNotOptimize(m.values());
+  }
+  state.counters["tets"] = mesh.num_tets();
+  state.counters["dofs"] = m.size();
+  state.counters["colors"] = m.num_colors();
+}
+BENCHMARK(BM_StiffnessRefill)->Arg(4000)->Arg(40000)->Unit(benchmark::kMillisecond);
+
+void BM_BuildPattern(benchmark::State& state) {
+  const TetMesh mesh = slab(state.range(0));
+  const StaticProblem p = impact(mesh);
+  for (auto _ : state) {
+    BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, p.anchors);
+    benchmark::DoNotOptimize(m.values());
+  }
+  BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, p.anchors);
+  state.counters["free_dofs"] = m.size();
+}
+BENCHMARK(BM_BuildPattern)->Arg(4000)->Arg(40000)->Unit(benchmark::kMillisecond);
+
+// One impact solve, two Newton iterations at most, relative residual 1e-6, StVK, glass. The
+// StaticSolver is kept across iterations (same mesh and anchors: pattern and symbolic analysis
+// reused), as the simulator does.
+void BM_ImpactSolve(benchmark::State& state) {
+  const auto kind = static_cast<LinearSolverKind>(state.range(0));
+  const TetMesh mesh = slab(state.range(1));
+  const FemModel model = make_fem_model(mesh, glass(), ModelKind::stvk);
+  const StaticProblem problem = impact(mesh);
+  StaticSolverOptions options;
+  options.max_newton_iterations = 2;
+  options.relative_residual_tolerance = 1e-6;
+  options.max_load_halvings = 0;
+  options.warm_start = false;  // every iteration repeats one impact: a warm start would be exact
+  options.linear.kind = kind;
+  options.linear.relative_tolerance = 1e-8;
+  StaticSolver solver(options);
+  std::vector<Vec3> x = mesh.positions;
+  (void)solver.solve(model, problem, x);  // builds the pattern and the symbolic factorization
+  StaticReport last;
+  double assembly = 0, linear = 0, force = 0;
+  for (auto _ : state) {
+    x = mesh.positions;
+    const Result<StaticReport> r = solver.solve(model, problem, x);
+    last = *r;
+    assembly += last.assembly_ms;
+    linear += last.linear_solve_ms;
+    force += last.force_ms;
+  }
+  const double n = static_cast<double>(state.iterations());
+  state.SetLabel(to_string(kind));
+  state.counters["tets"] = mesh.num_tets();
+  state.counters["active_tets"] = static_cast<double>(solver.matrix().active_tets().size());
+  state.counters["free_dofs"] = solver.matrix().size();
+  state.counters["converged"] = last.converged;
+  state.counters["newton"] = last.newton_iterations;
+  state.counters["lin_it"] = last.linear_iterations_total;
+  state.counters["rel_res"] = last.relative_residual;
+  state.counters["asm_ms"] = assembly / n;
+  state.counters["lin_ms"] = linear / n;
+  state.counters["force_ms"] = force / n;
+}
+BENCHMARK(BM_ImpactSolve)
+    ->ArgsProduct({{static_cast<int>(LinearSolverKind::direct_ldlt),
+                    static_cast<int>(LinearSolverKind::pcg_block_jacobi),
+                    static_cast<int>(LinearSolverKind::pcg_block_gauss_seidel)},
+                   {4000, 10000, 40000}})
+    ->Unit(benchmark::kMillisecond);
+
+// The first impact on a new mesh: pattern and symbolic analysis included.
+void BM_ImpactSolveCold(benchmark::State& state) {
+  const TetMesh mesh = slab(state.range(0));
+  const FemModel model = make_fem_model(mesh, glass(), ModelKind::stvk);
+  const StaticProblem problem = impact(mesh);
+  StaticSolverOptions options;
+  options.max_newton_iterations = 2;
+  for (auto _ : state) {
+    StaticSolver solver(options);
+    std::vector<Vec3> x = mesh.positions;
+    benchmark::DoNotOptimize(solver.solve(model, problem, x));
+  }
+}
+BENCHMARK(BM_ImpactSolveCold)->Arg(4000)->Arg(40000)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace shatter
+
+BENCHMARK_MAIN();

@@ -1,0 +1,250 @@
+// Block pattern construction, greedy tet colouring and the in-place refill of the stiffness.
+#include "shatter/solve/assembly.h"
+
+#include <algorithm>
+#include <atomic>
+
+#include <Eigen/Eigenvalues>
+
+#include "shatter/core/assert.h"
+#include "shatter/fem/fem_model.h"
+#include "shatter/fem/tet_kernels.h"
+
+namespace shatter {
+
+namespace {
+
+std::uint64_t next_pattern_id() {
+  static std::atomic<std::uint64_t> counter{0};
+  return ++counter;
+}
+
+}  // namespace
+
+BlockSparseMatrix::BlockSparseMatrix(Index num_nodes, const std::vector<TetIndices>& tets,
+                                     const std::vector<AnchorMask>& anchors)
+    : pattern_id_(next_pattern_id()) {
+  SHATTER_CHECK(anchors.empty() || static_cast<Index>(anchors.size()) == num_nodes);
+  anchors_ = anchors.empty() ? std::vector<AnchorMask>(static_cast<std::size_t>(num_nodes), anchor_none)
+                             : anchors;
+  for (AnchorMask& m : anchors_) m &= anchor_all;
+
+  // Active nodes: in some tet, with a free component. Numbered in node order.
+  std::vector<char> in_tet(static_cast<std::size_t>(num_nodes), 0);
+  for (const TetIndices& t : tets)
+    for (Index v : t) {
+      SHATTER_CHECK(v >= 0 && v < num_nodes);
+      in_tet[v] = 1;
+    }
+  active_of_node_.assign(static_cast<std::size_t>(num_nodes), -1);
+  for (Index v = 0; v < num_nodes; ++v) {
+    if (in_tet[v] && anchors_[v] != anchor_all) {
+      active_of_node_[v] = static_cast<Index>(node_of_active_.size());
+      node_of_active_.push_back(v);
+    }
+  }
+  const Index na = num_active();
+
+  // Active tets and their greedy colouring (in tet order): a tet takes the smallest colour that
+  // no tet sharing one of its nodes already has.
+  std::vector<Index> tet_color;
+  std::vector<std::vector<Index>> node_colors(static_cast<std::size_t>(num_nodes));
+  std::vector<Index> candidates;
+  std::vector<Index> active;
+  for (Index e = 0; e < static_cast<Index>(tets.size()); ++e) {
+    const TetIndices& t = tets[e];
+    if (active_of_node_[t[0]] < 0 && active_of_node_[t[1]] < 0 && active_of_node_[t[2]] < 0 &&
+        active_of_node_[t[3]] < 0)
+      continue;
+    candidates.clear();
+    for (Index v : t) candidates.insert(candidates.end(), node_colors[v].begin(), node_colors[v].end());
+    std::sort(candidates.begin(), candidates.end());
+    Index color = 0;
+    for (Index c : candidates) {
+      if (c == color) ++color;
+      else if (c > color) break;
+    }
+    for (Index v : t) node_colors[v].push_back(color);
+    active.push_back(e);
+    tet_color.push_back(color);
+  }
+  Index num_colors = 0;
+  for (Index c : tet_color) num_colors = std::max(num_colors, c + 1);
+  color_ptr_.assign(static_cast<std::size_t>(num_colors) + 1, 0);
+  for (Index c : tet_color) ++color_ptr_[c + 1];
+  for (Index c = 0; c < num_colors; ++c) color_ptr_[c + 1] += color_ptr_[c];
+  active_tets_.resize(active.size());
+  {
+    std::vector<Index> fill(color_ptr_.begin(), color_ptr_.end() - 1);
+    for (std::size_t s = 0; s < active.size(); ++s) active_tets_[fill[tet_color[s]]++] = active[s];
+  }
+  active_tet_nodes_.resize(active_tets_.size());
+  for (std::size_t s = 0; s < active_tets_.size(); ++s) active_tet_nodes_[s] = tets[active_tets_[s]];
+
+  // Block pattern: active node pairs sharing a tet.
+  std::vector<std::vector<Index>> neighbours(static_cast<std::size_t>(na));
+  for (const TetIndices& t : active_tet_nodes_)
+    for (Index v : t) {
+      const Index a = active_of_node_[v];
+      if (a < 0) continue;
+      for (Index w : t) {
+        const Index b = active_of_node_[w];
+        if (b >= 0) neighbours[a].push_back(b);
+      }
+    }
+  block_ptr_.assign(static_cast<std::size_t>(na) + 1, 0);
+  diagonal_block_.assign(static_cast<std::size_t>(na), -1);
+  for (Index a = 0; a < na; ++a) {
+    std::vector<Index>& nb = neighbours[a];
+    std::sort(nb.begin(), nb.end());
+    nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+    block_ptr_[a + 1] = block_ptr_[a] + static_cast<Index>(nb.size());
+  }
+  block_col_.reserve(static_cast<std::size_t>(block_ptr_[na]));
+  for (Index a = 0; a < na; ++a) {
+    for (Index b : neighbours[a]) {
+      if (b == a) diagonal_block_[a] = static_cast<Index>(block_col_.size());
+      block_col_.push_back(b);
+    }
+    SHATTER_CHECK(diagonal_block_[a] >= 0);
+  }
+
+  // Eigen matrix with the block layout (column-major; by symmetry column j = row j).
+  const Index n = 3 * na;
+  const Index nnz = 9 * block_ptr_[na];
+  matrix_.resize(n, n);
+  matrix_.resizeNonZeros(nnz);
+  int* outer = matrix_.outerIndexPtr();
+  int* inner = matrix_.innerIndexPtr();
+  for (Index a = 0; a < na; ++a) {
+    const Index m = block_ptr_[a + 1] - block_ptr_[a];
+    for (int i = 0; i < 3; ++i) {
+      Index p = 9 * block_ptr_[a] + i * 3 * m;
+      outer[3 * a + i] = p;
+      for (Index k = block_ptr_[a]; k < block_ptr_[a + 1]; ++k)
+        for (int j = 0; j < 3; ++j) inner[p++] = 3 * block_col_[k] + j;
+    }
+  }
+  outer[n] = nnz;
+  std::fill(values(), values() + nnz, 0.0);
+
+  // Where each active tet's 16 blocks go.
+  tet_block_entry_.resize(active_tets_.size());
+  for (std::size_t s = 0; s < active_tets_.size(); ++s) {
+    const TetIndices& t = active_tet_nodes_[s];
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) {
+        const Index a = active_of_node_[t[i]], b = active_of_node_[t[j]];
+        Index entry = -1;
+        if (a >= 0 && b >= 0) {
+          const auto first = block_col_.begin() + block_ptr_[a];
+          const auto last = block_col_.begin() + block_ptr_[a + 1];
+          const Index k = static_cast<Index>(std::lower_bound(first, last, b) - block_col_.begin());
+          entry = block_entry(a, k, 0, 0);
+        }
+        tet_block_entry_[s][4 * i + j] = entry;
+      }
+  }
+  for (Index a = 0; a < na; ++a) {
+    const AnchorMask mask = anchors_[node_of_active_[a]];
+    for (int c = 0; c < 3; ++c)
+      if (mask & (1u << c)) held_diagonal_.push_back(block_entry(a, diagonal_block_[a], c, c));
+  }
+}
+
+Mat3 BlockSparseMatrix::block(Index a, Index k) const {
+  Mat3 b;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) b(i, j) = values()[block_entry(a, k, i, j)];
+  return b;
+}
+
+void BlockSparseMatrix::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
+  SHATTER_ASSERT(x.size() == size());
+  y.resize(size());
+  const int* outer = matrix_.outerIndexPtr();
+  const int* inner = matrix_.innerIndexPtr();
+  const double* v = values();
+  parallel_for(0, size(), [&](std::int64_t r) {
+    double s = 0;
+    for (int p = outer[r]; p < outer[r + 1]; ++p) s += v[p] * x[inner[p]];
+    y[r] = s;
+  }, 4096);
+}
+
+void BlockSparseMatrix::add_element(Index slot, const Mat12& k) {
+  const TetIndices& t = active_tet_nodes_[slot];
+  const std::array<Index, 16>& entry = tet_block_entry_[slot];
+  double* v = values();
+  for (int i = 0; i < 4; ++i) {
+    const Index a = active_of_node_[t[i]];
+    if (a < 0) continue;
+    const Index stride = 3 * (block_ptr_[a + 1] - block_ptr_[a]);
+    const AnchorMask mi = anchors_[t[i]];
+    for (int j = 0; j < 4; ++j) {
+      const Index e = entry[4 * i + j];
+      if (e < 0) continue;
+      const AnchorMask mj = anchors_[t[j]];
+      if ((mi | mj) == 0) {
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) v[e + r * stride + c] += k(3 * i + r, 3 * j + c);
+      } else {
+        // Held components: their rows and columns are left out (identity set in finish_fill).
+        for (int r = 0; r < 3; ++r) {
+          if (mi & (1u << r)) continue;
+          for (int c = 0; c < 3; ++c)
+            if (!(mj & (1u << c))) v[e + r * stride + c] += k(3 * i + r, 3 * j + c);
+        }
+      }
+    }
+  }
+}
+
+void BlockSparseMatrix::finish_fill() {
+  for (Index p : held_diagonal_) values()[p] = 1.0;
+}
+
+Mat12 element_stiffness(const FemModel& model, Index e, const Mat34& xe, bool make_psd) {
+  Mat12 k = tet_stiffness(model.model, model.lame, model.rest[e], xe);
+  if (make_psd) {
+    switch (model.model) {
+      case ModelKind::linear:
+        break;  // constant and positive semi-definite
+      case ModelKind::stvk: {
+        // K = K_material + V (B S B^T) (x) I: the material part is PSD (mu > 0, bulk modulus > 0),
+        // the geometric part is PSD iff S is. Remove the negative part of S from it.
+        const Mat3 F = deformation_gradient(model.rest[e], xe);
+        const Mat3 E = 0.5 * (F.transpose() * F - Mat3::Identity());
+        const Mat3 S = 2.0 * model.lame.mu * E + model.lame.lambda * E.trace() * Mat3::Identity();
+        Eigen::SelfAdjointEigenSolver<Mat3> eig;
+        eig.computeDirect(S);
+        if (eig.eigenvalues()[0] >= 0.0) break;
+        Mat3 negative = Mat3::Zero();
+        for (int q = 0; q < 3; ++q)
+          if (eig.eigenvalues()[q] < 0.0)
+            negative += eig.eigenvalues()[q] * eig.eigenvectors().col(q) * eig.eigenvectors().col(q).transpose();
+        const Mat43 B = shape_gradients(model.rest[e]);
+        const Mat4 g = model.rest[e].volume * (B * negative * B.transpose());
+        for (int i = 0; i < 4; ++i)
+          for (int j = 0; j < 4; ++j) k.block<3, 3>(3 * i, 3 * j).diagonal().array() -= g(i, j);
+        break;
+      }
+      case ModelKind::corotated:
+        k = project_psd(k);
+        break;
+    }
+  }
+  return 0.5 * (k + k.transpose());  // exactly symmetric: the storage relies on it
+}
+
+void assemble_stiffness(const FemModel& model, const std::vector<Vec3>& x,
+                        const AssemblyOptions& options, BlockSparseMatrix& matrix) {
+  SHATTER_CHECK(static_cast<Index>(x.size()) == matrix.num_nodes());
+  matrix.refill([&](Index e) -> Mat12 {
+    Mat34 xe;
+    for (int k = 0; k < 4; ++k) xe.col(k) = x[model.tets[e][k]];
+    return element_stiffness(model, e, xe, options.project_psd);
+  });
+}
+
+}  // namespace shatter

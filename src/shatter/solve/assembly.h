@@ -1,0 +1,151 @@
+// Sparse stiffness assembly for the static solver (method.md §2.3, the paper's eq. 26-28): the
+// 3x3-block pattern of the nodes with a free component, built once per (mesh, anchors) and
+// refilled in place at every Newton iteration, deterministically on any thread count.
+#pragma once
+
+#include <Eigen/SparseCore>
+
+#include <cstdint>
+#include <vector>
+
+#include "shatter/core/parallel.h"
+#include "shatter/core/types.h"
+
+namespace shatter {
+
+struct FemModel;
+
+/// Held (Dirichlet) components of a node: bit c (0 = x, 1 = y, 2 = z) set = component c held.
+/// 7 holds the node; 2 alone is a roller on a plane y = const.
+using AnchorMask = std::uint8_t;
+inline constexpr AnchorMask anchor_none = 0;
+inline constexpr AnchorMask anchor_all = 7;
+
+/// Symmetric stiffness over the DOFs of the *active* nodes: nodes that belong to a tet and have at
+/// least one free component. DOF 3a + c is component c of active node a. Fully held nodes and
+/// nodes in no tet are eliminated. A held component of a partly held node (roller, symmetry plane)
+/// stays as a decoupled identity row and column whose right-hand side is zero, so that every block
+/// stays 3x3 and the solution there is exactly 0.
+///
+/// Storage: one Eigen::SparseMatrix (column-major, both triangles). Being symmetric, its columns are
+/// also its rows, so it is at the same time a scalar CSR matrix. Its value array is laid out by
+/// blocks: block row a (= scalar rows 3a..3a+2) holds m_a blocks, sorted by block column; scalar
+/// row 3a+i is the i-th run of 3 m_a values. The block-CSR view (block_ptr, block_col,
+/// block_entry) indexes that same array: nothing is copied between the two forms.
+class BlockSparseMatrix {
+ public:
+  BlockSparseMatrix() = default;
+  /// Pattern of the stiffness of `tets` over `num_nodes` nodes; `anchors`: held components per node
+  /// (#nodes, or empty = nothing held). Values start at zero.
+  BlockSparseMatrix(Index num_nodes, const std::vector<TetIndices>& tets,
+                    const std::vector<AnchorMask>& anchors);
+
+  [[nodiscard]] Index num_nodes() const { return static_cast<Index>(active_of_node_.size()); }
+  [[nodiscard]] Index num_active() const { return static_cast<Index>(node_of_active_.size()); }
+  /// Number of scalar rows (3 per active node).
+  [[nodiscard]] Index size() const { return 3 * num_active(); }
+  [[nodiscard]] Index num_blocks() const { return static_cast<Index>(block_col_.size()); }
+  /// Unique per built pattern; symbolic factorizations are keyed on it.
+  [[nodiscard]] std::uint64_t pattern_id() const { return pattern_id_; }
+
+  /// Active index of each node, -1 if eliminated (#nodes).
+  [[nodiscard]] const std::vector<Index>& active_of_node() const { return active_of_node_; }
+  /// Node of each active index (#active).
+  [[nodiscard]] const std::vector<Index>& node_of_active() const { return node_of_active_; }
+  /// Held components per node (#nodes).
+  [[nodiscard]] const std::vector<AnchorMask>& anchors() const { return anchors_; }
+  /// True when some active node has a held component (identity rows present).
+  [[nodiscard]] bool has_partial_anchors() const { return !held_diagonal_.empty(); }
+
+  /// Tets with at least one active corner, grouped by colour: no two tets of one colour share a
+  /// node, colour c is active_tets()[color_ptr()[c] .. color_ptr()[c+1]).
+  [[nodiscard]] const std::vector<Index>& active_tets() const { return active_tets_; }
+  [[nodiscard]] const std::vector<Index>& color_ptr() const { return color_ptr_; }
+  [[nodiscard]] Index num_colors() const { return static_cast<Index>(color_ptr_.size()) - 1; }
+
+  /// Block CSR: block row a has blocks block_ptr()[a] .. block_ptr()[a+1], with block columns
+  /// block_col() (sorted; the diagonal block is among them).
+  [[nodiscard]] const std::vector<Index>& block_ptr() const { return block_ptr_; }
+  [[nodiscard]] const std::vector<Index>& block_col() const { return block_col_; }
+  /// Position in values() of entry (i, j) of block k of block row a: A(3a+i, 3 block_col[k] + j).
+  [[nodiscard]] Index block_entry(Index a, Index k, int i, int j) const {
+    const Index p0 = block_ptr_[a];
+    return 9 * p0 + i * 3 * (block_ptr_[a + 1] - p0) + 3 * (k - p0) + j;
+  }
+  /// Block k of block row a as a 3x3 matrix.
+  [[nodiscard]] Mat3 block(Index a, Index k) const;
+  /// Index of the diagonal block of block row a.
+  [[nodiscard]] Index diagonal_block(Index a) const { return diagonal_block_[a]; }
+
+  /// The matrix in Eigen's form (size() x size(), both triangles).
+  [[nodiscard]] const Eigen::SparseMatrix<double>& matrix() const { return matrix_; }
+  [[nodiscard]] const double* values() const { return matrix_.valuePtr(); }
+  [[nodiscard]] double* values() { return matrix_.valuePtr(); }
+  [[nodiscard]] Index num_values() const { return static_cast<Index>(matrix_.nonZeros()); }
+
+  /// y = A x (x, y: size()); rows in parallel, each summed in a fixed order.
+  void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+
+  /// Refill the values: element_matrix(tet) (a symmetric 12x12, ordering [x0;x1;x2;x3]) of every
+  /// active tet, computed in one parallel loop into a buffer, is added into its blocks in the fixed
+  /// active_tets() order; then the held components are held. Every entry is therefore summed in
+  /// the same order on any thread count, with one parallel region per refill (few barriers: many
+  /// small per-colour regions stall badly when the cores are oversubscribed).
+  /// element_matrix must be safe to call concurrently.
+  template <class ElementMatrix>
+  void refill(ElementMatrix&& element_matrix);
+
+ private:
+  void add_element(Index slot, const Mat12& k);
+  void finish_fill();
+
+  std::uint64_t pattern_id_ = 0;
+  std::vector<Index> active_of_node_;
+  std::vector<Index> node_of_active_;
+  std::vector<AnchorMask> anchors_;
+  std::vector<Index> active_tets_;
+  std::vector<Index> color_ptr_;
+  std::vector<TetIndices> active_tet_nodes_;  ///< corners of each active tet, in active_tets order
+  /// Per active tet and corner pair (i, j), position of entry (0,0) of block (i, j) in values(),
+  /// -1 if a corner is eliminated (#active tets x 16).
+  std::vector<std::array<Index, 16>> tet_block_entry_;
+  std::vector<Index> block_ptr_;
+  std::vector<Index> block_col_;
+  std::vector<Index> diagonal_block_;
+  std::vector<Index> held_diagonal_;  ///< positions in values() of held components' diagonals
+  std::vector<Mat12> element_buffer_; ///< element matrices of the last refill (#active tets)
+  Eigen::SparseMatrix<double> matrix_;
+};
+
+/// Options of the stiffness assembly.
+struct AssemblyOptions {
+  /// Make each element matrix positive semi-definite (method.md §2.3), so that Newton's system
+  /// stays SPD when elements are compressed. linear: already PSD. stvk: the negative part of the
+  /// 2nd Piola-Kirchhoff stress S is removed from the geometric stiffness V (B S B^T) (x) I (the
+  /// material part is PSD): a 3x3 eigenproblem instead of a 12x12 one, and no change at all where
+  /// S is PSD. corotated: project_psd (12x12 eigen-decomposition).
+  bool project_psd = true;
+};
+
+/// Element stiffness of tet e at corners xe (3x4, m), symmetrised, made PSD if asked (above).
+Mat12 element_stiffness(const FemModel& model, Index e, const Mat34& xe, bool make_psd);
+
+/// Refill `matrix` (whose pattern was built for model.tets) with the stiffness dF/dx at the
+/// deformed positions x (m, #nodes). Element matrices are symmetrised.
+void assemble_stiffness(const FemModel& model, const std::vector<Vec3>& x,
+                        const AssemblyOptions& options, BlockSparseMatrix& matrix);
+
+// ---------------------------------------------------------------------------------------------
+
+template <class ElementMatrix>
+void BlockSparseMatrix::refill(ElementMatrix&& element_matrix) {
+  element_buffer_.resize(active_tets_.size());
+  parallel_for(0, static_cast<std::int64_t>(active_tets_.size()), [&](std::int64_t s) {
+    element_buffer_[static_cast<std::size_t>(s)] = element_matrix(active_tets_[static_cast<std::size_t>(s)]);
+  }, 32);
+  std::fill(values(), values() + num_values(), 0.0);
+  for (std::size_t s = 0; s < active_tets_.size(); ++s) add_element(static_cast<Index>(s), element_buffer_[s]);
+  finish_fill();
+}
+
+}  // namespace shatter

@@ -1,0 +1,114 @@
+// Static equilibrium F(x) = f_ext on the free nodes by Newton-Raphson (method.md §2.3, the paper's
+// eq. 14-17), with PSD-projected element stiffness, an energy line search and load stepping.
+// StaticSolver keeps the sparse pattern and the symbolic factorization for repeated solves on the
+// same mesh and anchors (the simulator solves at every impact).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "shatter/core/error.h"
+#include "shatter/core/types.h"
+#include "shatter/fem/fem_model.h"
+#include "shatter/solve/assembly.h"
+#include "shatter/solve/linear_solvers.h"
+
+namespace shatter {
+
+/// Loads and boundary conditions of a static problem.
+struct StaticProblem {
+  /// Held components per node (#nodes; bit c = component c held); empty = nothing held.
+  std::vector<AnchorMask> anchors;
+  /// Prescribed positions of the held components, m (#nodes; only held components are read);
+  /// empty = they keep their positions in the initial x.
+  std::vector<Vec3> anchor_positions;
+  /// External nodal forces, N (#nodes); empty = none.
+  std::vector<Vec3> external_forces;
+  /// Adds node_mass * gravity_vector to the external forces.
+  bool gravity = false;
+  Vec3 gravity_vector = Vec3(0, -9.81, 0);  ///< m/s^2
+};
+
+struct StaticSolverOptions {
+  int max_newton_iterations = 20;            ///< per load step
+  /// Converged when ||f_ext - F(x)|| over the free components <= tol * reference, reference =
+  /// ||f_ext|| over the free components (or, with no load, the initial imbalance that the
+  /// prescribed anchor positions cause). Where round-off keeps the residual above that (stiff
+  /// bodies, tight tolerances), a residual within its estimated round-off that a Newton step no
+  /// longer reduces counts as converged.
+  double relative_residual_tolerance = 1e-6;
+  /// Backtracking (Armijo) on the potential energy U(x) - f_ext^T x. Without it a step is only
+  /// tried at full length (and still rejected when the energy rises or turns non-finite).
+  bool line_search = true;
+  bool project_psd = true;                   ///< PSD-project each element stiffness
+  int load_increments = 1;                   ///< equal load steps to start with
+  /// A load step that fails (energy cannot decrease, non-finite values, no convergence) is
+  /// retried at half the size, at most this many times in the whole solve.
+  int max_load_halvings = 6;
+  /// PCG: the first Newton step of a load step starts from the previous first step d, scaled by
+  /// (r.d)/(d.K d) (the energy-norm optimal multiple: never a worse start than zero). Repeated
+  /// impacts at one place with other magnitudes then need few iterations.
+  bool warm_start = true;
+  LinearSolverOptions linear;
+};
+
+struct StaticReport {
+  bool converged = false;
+  int newton_iterations = 0;        ///< Newton iterations over all load steps
+  double relative_residual = 0;     ///< at the returned x, as in the tolerance
+  int load_steps = 0;               ///< load steps completed
+  double load_fraction = 0;         ///< fraction of the load in equilibrium at the returned x
+  int linear_iterations_total = 0;  ///< PCG iterations over all Newton iterations
+  int line_search_cuts = 0;         ///< step halvings by the line search
+  double assembly_ms = 0;           ///< stiffness refills (and the pattern when built)
+  double linear_solve_ms = 0;       ///< linear solves (factorizations, PCG)
+  double force_ms = 0;              ///< internal forces and energies
+  double total_ms = 0;
+  std::string message;              ///< why it did not converge ("" when it did)
+};
+
+/// Keeps what can be reused between solves with the same tets and anchors.
+class StaticSolver {
+ public:
+  explicit StaticSolver(const StaticSolverOptions& options = {});
+
+  [[nodiscard]] const StaticSolverOptions& options() const { return options_; }
+  void set_options(const StaticSolverOptions& options);
+
+  /// x: initial guess (usually the rest positions), m (#nodes); receives the solution. Returns an
+  /// error for inconsistent sizes; numerical trouble (non-finite input, no convergence) gives a
+  /// report with converged = false and a message, and x then holds the last equilibrium reached
+  /// (at a fraction of the load; at worst the initial x with the anchors applied), never NaN.
+  Result<StaticReport> solve(const FemModel& model, const StaticProblem& problem, std::vector<Vec3>& x);
+
+  /// Times the sparse pattern was (re)built; stays put while tets and anchors do not change.
+  [[nodiscard]] int pattern_builds() const { return pattern_builds_; }
+  [[nodiscard]] const LinearSolver& linear_solver() const { return linear_; }
+  /// The stiffness of the last Newton iteration (empty before the first solve).
+  [[nodiscard]] const BlockSparseMatrix& matrix() const { return matrix_; }
+
+ private:
+  void update_pattern(const FemModel& model, const std::vector<AnchorMask>& anchors);
+  /// Internal forces of the active tets at x, summed into force_.
+  void active_forces(const FemModel& model, const std::vector<Vec3>& x);
+  double active_energy(const FemModel& model, const std::vector<Vec3>& x) const;
+
+  StaticSolverOptions options_;
+  BlockSparseMatrix matrix_;
+  std::vector<TetIndices> pattern_tets_;
+  std::vector<AnchorMask> pattern_anchors_;
+  bool has_pattern_ = false;
+  int pattern_builds_ = 0;
+  LinearSolver linear_;
+  std::vector<Vec3> force_;          ///< internal forces, N (#nodes; valid on active tets' nodes)
+  std::vector<Mat34> tet_force_;     ///< forces per active tet, N (#active tets)
+  std::vector<double> force_error_;      ///< squared round-off estimate per component of force_, N^2 (#nodes)
+  std::vector<double> tet_force_error_;  ///< round-off estimate per force component per active tet, N
+  Eigen::VectorXd first_step_;       ///< first Newton step of the last load step (#DOFs)
+};
+
+/// One-off solve (builds a StaticSolver).
+Result<StaticReport> solve_static(const FemModel& model, const StaticProblem& problem,
+                                  std::vector<Vec3>& x, const StaticSolverOptions& options = {});
+
+}  // namespace shatter

@@ -1,0 +1,281 @@
+// Block pattern, refill, Dirichlet elimination and the three linear solvers against dense references.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
+
+#include <cstring>
+
+#include "shatter/core/parallel.h"
+#include "shatter/core/random.h"
+#include "shatter/fem/fem_model.h"
+#include "shatter/solve/assembly.h"
+#include "shatter/solve/linear_solvers.h"
+#include "solve_test_util.h"
+#include "support/test_support.h"
+
+namespace shatter {
+namespace {
+
+// Anchors: x = 0 face held, a few nodes partly held (rollers), one node free of all.
+std::vector<AnchorMask> mixed_anchors(const TetMesh& mesh) {
+  std::vector<AnchorMask> a(mesh.positions.size(), anchor_none);
+  for (std::size_t v = 0; v < a.size(); ++v) {
+    if (mesh.positions[v].x() == 0.0) a[v] = anchor_all;
+    else if (v % 7 == 3) a[v] = 2;       // y held
+    else if (v % 11 == 5) a[v] = 1 | 4;  // x and z held
+  }
+  return a;
+}
+
+// Dense 3N x 3N stiffness from triplets over all tets (no anchors).
+Eigen::MatrixXd dense_full(Index num_nodes, const std::vector<TetIndices>& tets,
+                           const std::vector<Mat12>& ke) {
+  std::vector<Eigen::Triplet<double>> trip;
+  for (std::size_t e = 0; e < tets.size(); ++e)
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j)
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c)
+            trip.emplace_back(3 * tets[e][i] + r, 3 * tets[e][j] + c, ke[e](3 * i + r, 3 * j + c));
+  Eigen::SparseMatrix<double> k(3 * num_nodes, 3 * num_nodes);
+  k.setFromTriplets(trip.begin(), trip.end());
+  return Eigen::MatrixXd(k);
+}
+
+// Global DOF (3 v + c) of each reduced row, -1 for an identity row of a held component.
+std::vector<Index> reduced_to_global(const BlockSparseMatrix& m) {
+  std::vector<Index> g(static_cast<std::size_t>(m.size()));
+  for (Index a = 0; a < m.num_active(); ++a) {
+    const Index v = m.node_of_active()[a];
+    for (int c = 0; c < 3; ++c) g[3 * a + c] = (m.anchors()[v] & (1u << c)) ? -1 : 3 * v + c;
+  }
+  return g;
+}
+
+std::vector<Mat12> random_spd_elements(std::size_t count, std::uint64_t seed) {
+  Random rng(seed);
+  std::vector<Mat12> ke(count);
+  for (Mat12& k : ke) {
+    Mat12 g;
+    for (int i = 0; i < 12; ++i)
+      for (int j = 0; j < 12; ++j) g(i, j) = rng.uniform(-1.0, 1.0);
+    k = g * g.transpose() + 0.05 * Mat12::Identity();
+  }
+  return ke;
+}
+
+TEST(Assembly, PatternRefillEqualsTripletAssembly) {
+  const TetMesh mesh = test::box(Vec3(1.0, 0.5, 0.4), {4, 3, 2}, 0.2);
+  const std::vector<AnchorMask> anchors = mixed_anchors(mesh);
+  BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, anchors);
+  ASSERT_GT(m.num_active(), 0);
+  EXPECT_TRUE(m.has_partial_anchors());
+  // Colours: no two tets of one colour share a node.
+  for (Index c = 0; c < m.num_colors(); ++c) {
+    std::vector<int> seen(mesh.positions.size(), 0);
+    for (Index s = m.color_ptr()[c]; s < m.color_ptr()[c + 1]; ++s)
+      for (Index v : mesh.tets[m.active_tets()[s]]) EXPECT_EQ(seen[v]++, 0);
+  }
+  const std::vector<Mat12> ke = random_spd_elements(mesh.tets.size(), 3);
+  for (int round = 0; round < 2; ++round) {  // the second refill must not accumulate
+    m.refill([&](Index e) { return ke[e]; });
+  }
+  const Eigen::MatrixXd full = dense_full(mesh.num_nodes(), mesh.tets, ke);
+  const std::vector<Index> g = reduced_to_global(m);
+  const Eigen::MatrixXd reduced = Eigen::MatrixXd(m.matrix());
+  double max_err = 0, scale = full.cwiseAbs().maxCoeff();
+  for (Index i = 0; i < m.size(); ++i)
+    for (Index j = 0; j < m.size(); ++j) {
+      double expect;
+      if (g[i] < 0 || g[j] < 0) expect = (i == j) ? 1.0 : 0.0;
+      else expect = full(g[i], g[j]);
+      max_err = std::max(max_err, std::abs(reduced(i, j) - expect));
+    }
+  EXPECT_LE(max_err, 1e-14 * scale);
+  // The block view reads the same values.
+  for (Index a = 0; a < m.num_active(); ++a)
+    for (Index k = m.block_ptr()[a]; k < m.block_ptr()[a + 1]; ++k) {
+      const Index b = m.block_col()[k];
+      EXPECT_EQ((m.block(a, k) - reduced.block(3 * a, 3 * b, 3, 3)).norm(), 0.0);
+    }
+  // multiply() equals the dense product.
+  Random rng(5);
+  Eigen::VectorXd x(m.size());
+  for (Index i = 0; i < m.size(); ++i) x[i] = rng.uniform(-1.0, 1.0);
+  Eigen::VectorXd y;
+  m.multiply(x, y);
+  EXPECT_LE((y - reduced * x).norm(), 1e-12 * (reduced * x).norm());
+}
+
+TEST(Assembly, StiffnessRefillEqualsElementTriplets) {
+  const TetMesh mesh = test::box(Vec3(1.0, 0.3, 0.3), {5, 2, 2}, 0.15);
+  const FemModel model = make_fem_model(mesh, test::test_material(), ModelKind::stvk);
+  Random rng(9);
+  std::vector<Vec3> x = mesh.positions;
+  for (Vec3& p : x) p += 0.02 * Vec3(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0));
+  const std::vector<AnchorMask> anchors = mixed_anchors(mesh);
+  BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, anchors);
+  // Exact stiffness: equals the triplet assembly of tet_stiffness.
+  {
+    assemble_stiffness(model, x, AssemblyOptions{.project_psd = false}, m);
+    std::vector<Mat12> ke(mesh.tets.size());
+    for (std::size_t e = 0; e < ke.size(); ++e) {
+      Mat34 xe;
+      for (int q = 0; q < 4; ++q) xe.col(q) = x[mesh.tets[e][q]];
+      const Mat12 k = tet_stiffness(model.model, model.lame, model.rest[e], xe);
+      ke[e] = 0.5 * (k + k.transpose());
+    }
+    const Eigen::MatrixXd full = dense_full(mesh.num_nodes(), mesh.tets, ke);
+    const std::vector<Index> g = reduced_to_global(m);
+    const Eigen::MatrixXd reduced = Eigen::MatrixXd(m.matrix());
+    const double scale = full.cwiseAbs().maxCoeff();
+    for (Index i = 0; i < m.size(); ++i)
+      for (Index j = 0; j < m.size(); ++j) {
+        const double expect = (g[i] < 0 || g[j] < 0) ? (i == j ? 1.0 : 0.0) : full(g[i], g[j]);
+        ASSERT_NEAR(reduced(i, j), expect, 1e-13 * scale) << i << "," << j;
+      }
+  }
+  // PSD option: every element matrix is PSD (the random state compresses some tets), and equal to
+  // the exact one where the tet is stretched only.
+  int modified = 0;
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
+    Mat34 xe;
+    for (int q = 0; q < 4; ++q) xe.col(q) = x[mesh.tets[e][q]];
+    const Mat12 exact = element_stiffness(model, static_cast<Index>(e), xe, false);
+    const Mat12 psd = element_stiffness(model, static_cast<Index>(e), xe, true);
+    const Eigen::SelfAdjointEigenSolver<Mat12> eig(psd);
+    EXPECT_GE(eig.eigenvalues().minCoeff(), -1e-9 * exact.norm());
+    if ((psd - exact).norm() > 0) ++modified;
+  }
+  EXPECT_GT(modified, 0);
+  const Mat34 rest_corners = mesh.corners(0);
+  const Mat34 stretched = (Mat3() << 1.01, 0, 0, 0, 1.005, 0, 0, 0, 1.002).finished() * rest_corners;
+  EXPECT_EQ((element_stiffness(model, 0, stretched, true) - element_stiffness(model, 0, stretched, false)).norm(), 0.0);
+}
+
+// The solvers agree with a dense solve of the full system with the held rows/columns removed.
+TEST(LinearSolvers, AgreeWithDenseEliminationOnRandomSpdSystems) {
+  const TetMesh mesh = test::box(Vec3(1.0, 0.6, 0.4), {5, 3, 3}, 0.2);
+  const std::vector<AnchorMask> anchors = mixed_anchors(mesh);
+  BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, anchors);
+  const std::vector<Mat12> ke = random_spd_elements(mesh.tets.size(), 17);
+  m.refill([&](Index e) { return ke[e]; });
+
+  // Dense reference: keep only free global DOFs.
+  const Eigen::MatrixXd full = dense_full(mesh.num_nodes(), mesh.tets, ke);
+  std::vector<Index> free_dofs;
+  for (Index v = 0; v < mesh.num_nodes(); ++v)
+    for (int c = 0; c < 3; ++c)
+      if (!(anchors[v] & (1u << c))) free_dofs.push_back(3 * v + c);
+  const Index nf = static_cast<Index>(free_dofs.size());
+  Eigen::MatrixXd kf(nf, nf);
+  for (Index i = 0; i < nf; ++i)
+    for (Index j = 0; j < nf; ++j) kf(i, j) = full(free_dofs[i], free_dofs[j]);
+  Random rng(23);
+  Eigen::VectorXd bf(nf);
+  for (Index i = 0; i < nf; ++i) bf[i] = rng.uniform(-1.0, 1.0);
+  const Eigen::VectorXd xf = kf.ldlt().solve(bf);
+
+  // Same right-hand side in the reduced layout (held components: 0).
+  const std::vector<Index> g = reduced_to_global(m);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(m.size());
+  std::vector<Index> pos_of_global(3 * mesh.positions.size(), -1);
+  for (Index i = 0; i < nf; ++i) pos_of_global[free_dofs[i]] = i;
+  for (Index i = 0; i < m.size(); ++i)
+    if (g[i] >= 0) b[i] = bf[pos_of_global[g[i]]];
+
+  for (LinearSolverKind kind : {LinearSolverKind::direct_ldlt, LinearSolverKind::pcg_block_jacobi,
+                                LinearSolverKind::pcg_block_gauss_seidel}) {
+    LinearSolver solver(LinearSolverOptions{.kind = kind, .relative_tolerance = 1e-12, .max_iterations = 5000});
+    Eigen::VectorXd x;
+    const LinearSolveReport rep = solver.solve(m, b, x);
+    ASSERT_TRUE(rep.converged) << to_string(kind) << ": " << rep.message;
+    EXPECT_LE(rep.relative_residual, 1e-11) << to_string(kind);
+    double err = 0;
+    for (Index i = 0; i < m.size(); ++i) {
+      if (g[i] < 0) {
+        EXPECT_EQ(x[i], 0.0);
+      } else {
+        err = std::max(err, std::abs(x[i] - xf[pos_of_global[g[i]]]));
+      }
+    }
+    EXPECT_LE(err, 1e-8 * xf.cwiseAbs().maxCoeff()) << to_string(kind);
+    if (kind != LinearSolverKind::direct_ldlt) {
+      EXPECT_GT(rep.iterations, 0);
+    }
+  }
+}
+
+TEST(LinearSolvers, GaussSeidelNeedsFewerIterationsThanJacobi) {
+  const TetMesh mesh = test::box(Vec3(1.0, 0.2, 0.2), {20, 4, 4});
+  const FemModel model = make_fem_model(mesh, test::test_material(), ModelKind::linear);
+  std::vector<AnchorMask> anchors(mesh.positions.size(), anchor_none);
+  for (std::size_t v = 0; v < anchors.size(); ++v)
+    if (mesh.positions[v].x() == 0.0) anchors[v] = anchor_all;
+  BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, anchors);
+  assemble_stiffness(model, mesh.positions, {}, m);
+  Eigen::VectorXd b = Eigen::VectorXd::Ones(m.size());
+  int iterations[2] = {0, 0};
+  int i = 0;
+  for (LinearSolverKind kind : {LinearSolverKind::pcg_block_jacobi, LinearSolverKind::pcg_block_gauss_seidel}) {
+    LinearSolver solver(LinearSolverOptions{.kind = kind, .relative_tolerance = 1e-8});
+    Eigen::VectorXd x;
+    const LinearSolveReport rep = solver.solve(m, b, x);
+    ASSERT_TRUE(rep.converged) << rep.message;
+    iterations[i++] = rep.iterations;
+  }
+  EXPECT_LT(iterations[1], iterations[0]);
+}
+
+TEST(LinearSolvers, DirectReusesSymbolicAnalysisAndWarmStartHelps) {
+  const TetMesh mesh = test::box(Vec3(1.0, 0.5, 0.5), {4, 2, 2});
+  std::vector<AnchorMask> anchors(mesh.positions.size(), anchor_none);
+  for (std::size_t v = 0; v < anchors.size(); ++v)
+    if (mesh.positions[v].x() == 0.0) anchors[v] = anchor_all;
+  BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, anchors);
+  LinearSolver direct(LinearSolverOptions{.kind = LinearSolverKind::direct_ldlt});
+  Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(m.size(), -1.0, 2.0), x;
+  for (int round = 0; round < 3; ++round) {
+    const std::vector<Mat12> ke = random_spd_elements(mesh.tets.size(), 40 + round);
+    m.refill([&](Index e) { return ke[e]; });
+    const LinearSolveReport rep = direct.solve(m, b, x);
+    ASSERT_TRUE(rep.converged);
+    EXPECT_EQ(rep.analyzed, round == 0);
+    EXPECT_LE(rep.relative_residual, 1e-12);
+  }
+  EXPECT_EQ(direct.symbolic_analyses(), 1);
+  BlockSparseMatrix other(mesh.num_nodes(), mesh.tets, anchors);  // a new pattern: analyse again
+  other.refill([&](Index e) { return random_spd_elements(1, e)[0]; });
+  ASSERT_TRUE(direct.solve(other, b, x).converged);
+  EXPECT_EQ(direct.symbolic_analyses(), 2);
+
+  // Warm start from the exact solution: no iteration needed.
+  LinearSolver pcg(LinearSolverOptions{.kind = LinearSolverKind::pcg_block_jacobi, .warm_start = true});
+  const LinearSolveReport warm = pcg.solve(other, b, x);
+  ASSERT_TRUE(warm.converged);
+  EXPECT_LE(warm.iterations, 1);
+}
+
+TEST(LinearSolvers, BadInputGivesReportNotNaN) {
+  const TetMesh mesh = test::box(Vec3(1.0, 1.0, 1.0), {2, 2, 2});
+  BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, {});  // nothing held: the zero matrix is singular
+  for (LinearSolverKind kind : {LinearSolverKind::direct_ldlt, LinearSolverKind::pcg_block_jacobi,
+                                LinearSolverKind::pcg_block_gauss_seidel}) {
+    LinearSolver solver(LinearSolverOptions{.kind = kind});
+    Eigen::VectorXd b = Eigen::VectorXd::Ones(m.size()), x;
+    LinearSolveReport rep = solver.solve(m, b, x);
+    EXPECT_FALSE(rep.converged) << to_string(kind);
+    EXPECT_FALSE(rep.message.empty());
+    EXPECT_TRUE(x.allFinite());
+    b[0] = std::numeric_limits<double>::quiet_NaN();
+    rep = solver.solve(m, b, x);
+    EXPECT_FALSE(rep.converged);
+    EXPECT_TRUE(x.allFinite());
+  }
+  EXPECT_TRUE(parse_linear_solver_kind("pcg-gauss-seidel").ok());
+  EXPECT_FALSE(parse_linear_solver_kind("cholmod").ok());
+}
+
+}  // namespace
+}  // namespace shatter

@@ -1,0 +1,351 @@
+// Static equilibrium: Hooke's law on a bar, cantilever convergence to beam theory, Newton
+// convergence, load stepping, determinism across thread counts, and no NaN on bad input.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstring>
+#include <limits>
+
+#include "shatter/core/parallel.h"
+#include "shatter/solve/static_solver.h"
+#include "solve_test_util.h"
+#include "support/test_support.h"
+
+namespace shatter {
+namespace {
+
+constexpr double kE = 70e9;
+constexpr double kNu = 0.3;
+
+// Bar [0,L] x [0,a] x [0,a]: the x = 0 face held in x only (rollers), the origin held, node
+// (0,a,0) held in x and z: no rigid motion, free lateral contraction. Force P along +x on x = L.
+struct Bar {
+  double length = 1.0, side = 0.2;
+  TetMesh mesh;
+  StaticProblem problem;
+};
+
+Bar make_bar(double total_force, std::array<Index, 3> cells, double jitter = 0.0) {
+  Bar bar;
+  bar.mesh = test::box(Vec3(bar.length, bar.side, bar.side), cells, jitter);
+  const std::size_t n = bar.mesh.positions.size();
+  bar.problem.anchors.assign(n, anchor_none);
+  for (std::size_t v = 0; v < n; ++v) {
+    const Vec3& p = bar.mesh.positions[v];
+    if (p.x() != 0.0) continue;
+    bar.problem.anchors[v] = 1;  // x
+    if (p.y() == 0.0 && p.z() == 0.0) bar.problem.anchors[v] = anchor_all;
+    if (p.y() == bar.side && p.z() == 0.0) bar.problem.anchors[v] = 1 | 4;
+  }
+  const double area = bar.side * bar.side;
+  bar.problem.external_forces = test::face_load(
+      bar.mesh, [&](const Vec3& p) { return p.x() == bar.length; }, Vec3(total_force / area, 0, 0));
+  return bar;
+}
+
+TEST(StaticSolver, UniaxialBarFollowsHookesLaw) {
+  const double sigma = 7e6;  // Pa: strain 1e-4 in glass-like material
+  for (ModelKind kind : {ModelKind::linear, ModelKind::stvk}) {
+    Bar bar = make_bar(sigma * 0.2 * 0.2, {6, 2, 2}, 0.15);
+    const FemModel model = make_fem_model(bar.mesh, test::test_material(kE, kNu), kind);
+    std::vector<Vec3> x = bar.mesh.positions;
+    const Result<StaticReport> r = solve_static(model, bar.problem, x);
+    ASSERT_OK(r);
+    ASSERT_TRUE(r->converged) << r->message;
+    EXPECT_LE(r->relative_residual, 1e-6);
+    const double strain = sigma / kE;
+    const double tol = kind == ModelKind::linear ? 1e-6 : 2e-4;  // StVK: O(strain) from Green strain
+    for (std::size_t v = 0; v < x.size(); ++v) {
+      const Vec3& p = bar.mesh.positions[v];
+      const Vec3 u = x[v] - p;
+      // Every node follows the homogeneous field u = (eps x, -nu eps y, -nu eps z).
+      EXPECT_NEAR(u.x(), strain * p.x(), tol * strain * bar.length) << v;
+      EXPECT_NEAR(u.y(), -kNu * strain * p.y(), tol * strain * bar.length) << v;
+      EXPECT_NEAR(u.z(), -kNu * strain * p.z(), tol * strain * bar.length) << v;
+    }
+    const double end = (x[x.size() - 1] - bar.mesh.positions.back()).x();
+    EXPECT_NEAR(end / (strain * bar.length), 1.0, tol) << to_string(kind);
+  }
+}
+
+// Cantilever L x h x h clamped at x = 0, tip load P (-y) spread over x = L. Euler-Bernoulli:
+// d = P L^3 / (3 E I), I = h^4 / 12; Timoshenko adds P L / (kappa G A) with kappa = 5/6.
+TEST(StaticSolver, CantileverConvergesTowardBeamTheory) {
+  const double L = 1.0, h = 0.1, P = 1000.0;
+  const double I = h * h * h * h / 12.0;
+  const double euler_bernoulli = P * L * L * L / (3 * kE * I);
+  const double shear = P * L / ((5.0 / 6.0) * (kE / (2 * (1 + kNu))) * h * h);
+  std::printf("cantilever L=%.1f m, h=%.2f m, E=%.0f GPa, nu=%.2f, P=%.0f N: Euler-Bernoulli %.4e m, "
+              "Timoshenko %.4e m (ratio %.4f)\n", L, h, kE / 1e9, kNu, P, euler_bernoulli,
+              euler_bernoulli + shear, (euler_bernoulli + shear) / euler_bernoulli);
+  std::printf("%-12s %8s %14s %10s\n", "cells", "tets", "tip defl. m", "ratio EB");
+  double previous = 0;
+  double last_ratio = 0;
+  for (Index k : {1, 2, 4, 8}) {
+    const TetMesh mesh = test::box(Vec3(L, h, h), {10 * k, k, k});
+    const FemModel model = make_fem_model(mesh, test::test_material(kE, kNu), ModelKind::linear);
+    StaticProblem problem;
+    problem.anchors.assign(mesh.positions.size(), anchor_none);
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v)
+      if (mesh.positions[v].x() == 0.0) problem.anchors[v] = anchor_all;
+    problem.external_forces =
+        test::face_load(mesh, [&](const Vec3& p) { return p.x() == L; }, Vec3(0, -P / (h * h), 0));
+    std::vector<Vec3> x = mesh.positions;
+    const Result<StaticReport> r = solve_static(model, problem, x);
+    ASSERT_OK(r);
+    ASSERT_TRUE(r->converged) << r->message;
+    // Mean vertical deflection of the loaded face.
+    double sum = 0;
+    int count = 0;
+    for (std::size_t v = 0; v < x.size(); ++v)
+      if (mesh.positions[v].x() == L) {
+        sum += mesh.positions[v].y() - x[v].y();
+        ++count;
+      }
+    const double tip = sum / count;
+    const double ratio = tip / euler_bernoulli;
+    std::printf("%3dx%dx%-6d %8d %14.4e %10.4f\n", 10 * k, k, k, mesh.num_tets(), tip, ratio);
+    EXPECT_GT(tip, previous);  // softens monotonically under refinement (linear tets are stiff)
+    previous = tip;
+    last_ratio = ratio;
+  }
+  EXPECT_GT(last_ratio, 0.85);
+  EXPECT_LT(last_ratio, 1.02);
+}
+
+TEST(StaticSolver, NewtonConvergesInFewIterationsOnStiffProblem) {
+  for (LinearSolverKind kind : {LinearSolverKind::direct_ldlt, LinearSolverKind::pcg_block_jacobi,
+                                LinearSolverKind::pcg_block_gauss_seidel}) {
+    Bar bar = make_bar(2e5, {8, 2, 2});
+    // Bend it too: a transverse load on the end.
+    for (std::size_t v = 0; v < bar.mesh.positions.size(); ++v)
+      if (bar.mesh.positions[v].x() == bar.length) bar.problem.external_forces[v].y() += 50.0;
+    const FemModel model = make_fem_model(bar.mesh, test::test_material(kE, kNu), ModelKind::stvk);
+    std::vector<Vec3> x = bar.mesh.positions;
+    StaticSolverOptions options;
+    options.linear.kind = kind;
+    const Result<StaticReport> r = solve_static(model, bar.problem, x, options);
+    ASSERT_OK(r);
+    ASSERT_TRUE(r->converged) << r->message;
+    EXPECT_LE(r->newton_iterations, 3) << to_string(kind);
+    EXPECT_LE(r->relative_residual, 1e-6);
+    EXPECT_EQ(r->load_steps, 1);
+    if (kind != LinearSolverKind::direct_ldlt) {
+      EXPECT_GT(r->linear_iterations_total, 0);
+    }
+  }
+}
+
+TEST(StaticSolver, LoadIncrementsRescueLargeLoad) {
+  // A soft StVK cantilever under a tip load that bends it far: the full Newton step fails.
+  const double L = 1.0, h = 0.1;
+  const TetMesh mesh = test::box(Vec3(L, h, h), {10, 1, 1});
+  const FemModel model = make_fem_model(mesh, test::test_material(1e6, 0.3), ModelKind::stvk);
+  StaticProblem problem;
+  problem.anchors.assign(mesh.positions.size(), anchor_none);
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v)
+    if (mesh.positions[v].x() == 0.0) problem.anchors[v] = anchor_all;
+  problem.external_forces =
+      test::face_load(mesh, [&](const Vec3& p) { return p.x() == L; }, Vec3(0, -60.0 / (h * h), 0));
+  StaticSolverOptions options;
+  options.max_newton_iterations = 8;
+  options.max_load_halvings = 0;
+  options.project_psd = false;  // the exact Hessian: quadratic convergence once close
+  std::vector<Vec3> x = mesh.positions;
+  Result<StaticReport> r = solve_static(model, problem, x, options);
+  ASSERT_OK(r);
+  EXPECT_FALSE(r->converged);
+  EXPECT_FALSE(r->message.empty());
+  for (const Vec3& p : x) EXPECT_TRUE(p.allFinite());
+
+  options.max_load_halvings = 8;
+  x = mesh.positions;
+  r = solve_static(model, problem, x, options);
+  ASSERT_OK(r);
+  ASSERT_TRUE(r->converged) << r->message;
+  std::printf("large load: %d load steps, %d Newton iterations, %d line-search cuts\n", r->load_steps,
+              r->newton_iterations, r->line_search_cuts);
+  EXPECT_GT(r->load_steps, 1);
+  EXPECT_LE(r->relative_residual, 1e-6);
+  double tip = 0;
+  for (std::size_t v = 0; v < x.size(); ++v) tip = std::max(tip, mesh.positions[v].y() - x[v].y());
+  EXPECT_GT(tip, 0.1 * L);  // a large deflection
+}
+
+TEST(StaticSolver, BitIdenticalOnOneAndTwoThreads) {
+  const TetMesh mesh = test::box(Vec3(2.0, 1.0, 1.0), {16, 8, 8}, 0.1);
+  const FemModel model = make_fem_model(mesh, test::test_material(kE, kNu), ModelKind::stvk);
+  StaticProblem problem;
+  problem.anchors.assign(mesh.positions.size(), anchor_none);
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v)
+    if (mesh.positions[v].x() == 0.0) problem.anchors[v] = anchor_all;
+  problem.external_forces =
+      test::face_load(mesh, [&](const Vec3& p) { return p.x() == 2.0; }, Vec3(1e6, -1e5, 0));
+  problem.gravity = true;
+  const int saved = num_threads();
+  for (LinearSolverKind kind : {LinearSolverKind::pcg_block_jacobi, LinearSolverKind::pcg_block_gauss_seidel,
+                                LinearSolverKind::direct_ldlt}) {
+    std::vector<Vec3> results[2];
+    for (int threads : {1, 2}) {
+      set_num_threads(threads);
+      StaticSolverOptions options;
+      options.linear.kind = kind;
+      results[threads - 1] = mesh.positions;
+      const Result<StaticReport> r = solve_static(model, problem, results[threads - 1], options);
+      ASSERT_OK(r);
+      ASSERT_TRUE(r->converged) << r->message;
+    }
+    ASSERT_EQ(std::memcmp(results[0].data(), results[1].data(), results[0].size() * sizeof(Vec3)), 0)
+        << to_string(kind);
+  }
+  set_num_threads(saved);
+}
+
+TEST(StaticSolver, ReusesPatternAcrossSolves) {
+  Bar bar = make_bar(1e5, {4, 2, 2});
+  const FemModel model = make_fem_model(bar.mesh, test::test_material(), ModelKind::stvk);
+  StaticSolverOptions options;
+  options.linear.kind = LinearSolverKind::direct_ldlt;
+  StaticSolver solver(options);
+  for (int round = 0; round < 3; ++round) {
+    std::vector<Vec3> x = bar.mesh.positions;
+    const Result<StaticReport> r = solver.solve(model, bar.problem, x);
+    ASSERT_OK(r);
+    ASSERT_TRUE(r->converged);
+  }
+  EXPECT_EQ(solver.pattern_builds(), 1);
+  EXPECT_EQ(solver.linear_solver().symbolic_analyses(), 1);
+  bar.problem.anchors[5] = anchor_all;
+  std::vector<Vec3> x = bar.mesh.positions;
+  ASSERT_OK(solver.solve(model, bar.problem, x));
+  EXPECT_EQ(solver.pattern_builds(), 2);
+}
+
+TEST(StaticSolver, WarmStartCutsIterationsOfRepeatedImpacts) {
+  Bar bar = make_bar(1e5, {12, 3, 3});
+  for (std::size_t v = 0; v < bar.mesh.positions.size(); ++v)
+    if (bar.mesh.positions[v].x() == bar.length) bar.problem.external_forces[v].y() += 20.0;
+  const FemModel model = make_fem_model(bar.mesh, test::test_material(), ModelKind::stvk);
+  int iterations[2][3] = {};
+  for (bool warm : {false, true}) {
+    StaticSolverOptions options;
+    options.warm_start = warm;
+    StaticSolver solver(options);
+    StaticProblem p = bar.problem;
+    for (int round = 0; round < 3; ++round) {
+      std::vector<Vec3> x = bar.mesh.positions;
+      const Result<StaticReport> r = solver.solve(model, p, x);
+      ASSERT_OK(r);
+      ASSERT_TRUE(r->converged) << r->message;
+      iterations[warm][round] = r->linear_iterations_total;
+      for (Vec3& f : p.external_forces) f *= 1.5;  // the next impact is harder
+    }
+  }
+  std::printf("PCG iterations per impact, cold: %d %d %d, warm: %d %d %d\n", iterations[0][0],
+              iterations[0][1], iterations[0][2], iterations[1][0], iterations[1][1], iterations[1][2]);
+  EXPECT_EQ(iterations[1][0], iterations[0][0]);  // nothing to start from yet
+  EXPECT_LT(iterations[1][1], iterations[0][1]);
+  EXPECT_LT(iterations[1][2], iterations[0][2]);
+}
+
+TEST(StaticSolver, PrescribedAnchorDisplacement) {
+  // Stretch the bar by moving its x = L face: the reaction follows Hooke's law, no external load.
+  Bar bar = make_bar(0.0, {6, 2, 2});
+  bar.problem.external_forces.clear();
+  bar.problem.anchor_positions = bar.mesh.positions;
+  const double stretch = 1e-4;
+  for (std::size_t v = 0; v < bar.mesh.positions.size(); ++v)
+    if (bar.mesh.positions[v].x() == bar.length) {
+      bar.problem.anchors[v] |= 1;
+      bar.problem.anchor_positions[v].x() += stretch;
+    }
+  const FemModel model = make_fem_model(bar.mesh, test::test_material(), ModelKind::linear);
+  std::vector<Vec3> x = bar.mesh.positions;
+  const Result<StaticReport> r = solve_static(model, bar.problem, x);
+  ASSERT_OK(r);
+  ASSERT_TRUE(r->converged) << r->message;
+  for (std::size_t v = 0; v < x.size(); ++v)
+    EXPECT_NEAR(x[v].x() - bar.mesh.positions[v].x(), stretch * bar.mesh.positions[v].x(), 1e-6 * stretch);
+}
+
+// A stiff linear cantilever (steel, 1 m x 0.1 m x 0.1 m, tip load) solved to a tight tolerance with
+// the direct solver: one Newton step is exact, after which the residual sits at its round-off
+// level (the positions carry the small displacements only to ~1e-16 m, and stresses of ~1e11 Pa
+// moduli amplify that). The solver must recognise that, not iterate on noise until it gives up.
+TEST(StaticSolver, StiffLinearCantileverConvergesAtRoundOffLevel) {
+  const double L = 1.0, h = 0.1;
+  const TetMesh mesh = test::box(Vec3(L, h, h), {12, 2, 2});
+  const FemModel model = make_fem_model(mesh, test::test_material(200e9, 0.3), ModelKind::linear);
+  StaticProblem problem;
+  problem.anchors.assign(mesh.positions.size(), anchor_none);
+  int loaded = 0;
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+    if (mesh.positions[v].x() == 0.0) problem.anchors[v] = anchor_all;
+    if (mesh.positions[v].x() == L) ++loaded;
+  }
+  // Reference: the linear system K u = f solved once by the factorization.
+  BlockSparseMatrix k(mesh.num_nodes(), mesh.tets, problem.anchors);
+  assemble_stiffness(model, mesh.positions, AssemblyOptions{}, k);
+  for (double total : {1000.0, 1.0}) {  // N, along -y, spread over the loaded face's nodes
+    problem.external_forces.assign(mesh.positions.size(), Vec3::Zero());
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v)
+      if (mesh.positions[v].x() == L) problem.external_forces[v].y() = -total / loaded;
+    Eigen::VectorXd f(k.size()), u;
+    for (Index a = 0; a < k.num_active(); ++a) f.segment<3>(3 * a) = problem.external_forces[k.node_of_active()[a]];
+    LinearSolver direct(LinearSolverOptions{.kind = LinearSolverKind::direct_ldlt});
+    ASSERT_TRUE(direct.solve(k, f, u).converged);
+    for (double tolerance : {1e-8, 1e-12}) {
+      StaticSolverOptions options;
+      options.relative_residual_tolerance = tolerance;
+      options.linear.kind = LinearSolverKind::direct_ldlt;
+      std::vector<Vec3> x = mesh.positions;
+      const Result<StaticReport> r = solve_static(model, problem, x, options);
+      ASSERT_OK(r);
+      ASSERT_TRUE(r->converged) << total << " N, tolerance " << tolerance << ": " << r->message;
+      EXPECT_EQ(r->load_steps, 1);
+      EXPECT_LE(r->newton_iterations, 3);
+      double max_u = 0, max_difference = 0;
+      for (Index a = 0; a < k.num_active(); ++a) {
+        const Index v = k.node_of_active()[a];
+        max_u = std::max(max_u, u.segment<3>(3 * a).norm());
+        max_difference = std::max(max_difference, (x[v] - mesh.positions[v] - u.segment<3>(3 * a)).norm());
+      }
+      // Positions near x = L hold a displacement only to a few ulps of L.
+      const double representable = 16 * std::numeric_limits<double>::epsilon() * L;
+      EXPECT_LE(max_difference, 1e-9 * max_u + representable) << total << " N, tolerance " << tolerance;
+    }
+  }
+}
+
+TEST(StaticSolver, NaNNeverEscapes) {
+  Bar bar = make_bar(1e5, {3, 1, 1});
+  const FemModel model = make_fem_model(bar.mesh, test::test_material(), ModelKind::stvk);
+  const std::vector<Vec3> rest = bar.mesh.positions;
+  auto expect_clean_failure = [&](const FemModel& m, const StaticProblem& p, const char* what) {
+    std::vector<Vec3> x = rest;
+    const Result<StaticReport> r = solve_static(m, p, x);
+    ASSERT_OK(r);
+    EXPECT_FALSE(r->converged) << what;
+    EXPECT_FALSE(r->message.empty()) << what;
+    for (const Vec3& q : x) EXPECT_TRUE(q.allFinite()) << what;
+  };
+  StaticProblem p = bar.problem;
+  p.external_forces[3].y() = std::numeric_limits<double>::quiet_NaN();
+  expect_clean_failure(model, p, "NaN force");
+  p = bar.problem;
+  p.external_forces[3].x() = std::numeric_limits<double>::infinity();
+  expect_clean_failure(model, p, "infinite force");
+  FemModel bad = model;
+  bad.lame.mu = std::numeric_limits<double>::quiet_NaN();
+  expect_clean_failure(bad, bar.problem, "NaN material");
+  // Not anchored at all with a net force: no equilibrium exists.
+  p = bar.problem;
+  p.anchors.clear();
+  expect_clean_failure(model, p, "no anchors");
+  // Wrong sizes are errors.
+  std::vector<Vec3> x(3, Vec3::Zero());
+  EXPECT_FALSE(solve_static(model, bar.problem, x).ok());
+}
+
+}  // namespace
+}  // namespace shatter
