@@ -1,0 +1,120 @@
+#include "shatter/fracture/crack.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "shatter/core/assert.h"
+#include "shatter/fracture/adjacency.h"
+
+namespace shatter {
+namespace {
+Vec3 centroid(const TetMesh& mesh, Index e) {
+  const TetIndices& t = mesh.tets[e];
+  return (mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]] + mesh.positions[t[3]]) / 4.0;
+}
+double longest_edge(const TetMesh& mesh, Index e) {
+  const Mat34 x = mesh.corners(e);
+  double l = 0;
+  for (int a = 0; a < 4; ++a)
+    for (int b = a + 1; b < 4; ++b) l = std::max(l, (x.col(a) - x.col(b)).norm());
+  return l;
+}
+}  // namespace
+
+double material_brittleness(const Material& material, double body_size) {
+  if (!std::isfinite(material.fracture_toughness) || !(material.tensile_strength > 0)) return 0.5;
+  // beta = sigma_t sqrt(pi L) / K_Ic = sqrt(L / l_ch): the stress intensity of a body-sized crack at
+  // the strength stress over the toughness.
+  const double beta = material.tensile_strength * std::sqrt(std::numbers::pi * body_size) / material.fracture_toughness;
+  return std::clamp(beta, 0.5, 20.0);
+}
+
+double crack_radius(double stress, double strength, double brittleness, double r0, double r_min) {
+  const double excess = std::max(0.0, stress / strength - 1.0);
+  return std::max(r_min, r0 * std::min(1.0, brittleness * excess));
+}
+
+std::vector<Index> crack_region(const TetMesh& mesh, const NodeTets& incidence, Index origin_tet,
+                                const Vec3& center, double radius) {
+  std::vector<char> seen(mesh.tets.size(), 0);
+  std::vector<Index> out{origin_tet};
+  seen[origin_tet] = 1;
+  const double r2 = radius * radius;
+  for (std::size_t i = 0; i < out.size(); ++i)
+    for (int k = 0; k < 4; ++k) {
+      const Index n = face_neighbor(mesh, incidence, out[i], k);
+      if (n < 0 || seen[n]) continue;
+      seen[n] = 1;
+      if ((centroid(mesh, n) - center).squaredNorm() <= r2) out.push_back(n);
+    }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStress>& stress,
+                                   const Material& material, const CrackOptions& options,
+                                   const std::vector<Index>& ductile_origins) {
+  SHATTER_CHECK(stress.size() == mesh.tets.size());
+  std::vector<CrackPlan> plans;
+  if (options.max_cracks <= 0 || mesh.tets.empty()) return plans;
+  const double strength = material.tensile_strength;
+  const double body = mesh.bounds().extent().norm();
+  const double k = options.brittleness > 0 ? options.brittleness : material_brittleness(material, body);
+  const double r0 = options.radius_fraction * body;
+
+  // Candidates: ductile origins first (in the given order), then tets over strength by decreasing
+  // largest principal stress (ties: lower index).
+  std::vector<Index> over;
+  if (std::isfinite(strength))
+    for (Index e = 0; e < mesh.num_tets(); ++e)
+      if (stress[e].principal[0] > strength) over.push_back(e);
+  std::sort(over.begin(), over.end(), [&](Index a, Index b) {
+    const double sa = stress[a].principal[0], sb = stress[b].principal[0];
+    return sa != sb ? sa > sb : a < b;
+  });
+  if (over.empty() && ductile_origins.empty()) return plans;
+
+  const NodeTets incidence = node_tets(mesh);
+  std::vector<char> taken(mesh.tets.size(), 0);
+  auto consider = [&](Index e, bool ductile) {
+    if (static_cast<int>(plans.size()) >= options.max_cracks || taken[e]) return;
+    const Vec3 c = centroid(mesh, e);
+    const double r_min = options.min_radius_edges * longest_edge(mesh, e);
+    const double r = ductile ? r_min : crack_radius(stress[e].principal[0], strength, k, r0, r_min);
+    for (const CrackPlan& p : plans)
+      if ((c - p.origin).norm() <= options.separation * p.radius) return;
+    CrackPlan p;
+    p.origin_tet = e;
+    p.origin = c;
+    p.normal = stress[e].directions.col(0).normalized();
+    p.stress = stress[e].principal[0];
+    p.radius = r;
+    p.ductile = ductile;
+    p.tets = crack_region(mesh, incidence, e, c, r);
+    for (Index t : p.tets) taken[t] = 1;
+    plans.push_back(std::move(p));
+  };
+  for (Index e : ductile_origins) consider(e, true);
+  for (Index e : over) consider(e, false);
+  return plans;
+}
+
+StressHistory::StressHistory(Index num_tets, double time_constant)
+    : average_(static_cast<std::size_t>(num_tets), Mat3::Zero()), tau_(time_constant) {
+  SHATTER_CHECK(time_constant > 0);
+}
+
+void StressHistory::update(const std::vector<Mat3>& sigma, double dt) {
+  SHATTER_CHECK(sigma.size() == average_.size() && dt >= 0);
+  const double alpha = 1.0 - std::exp(-dt / tau_);
+  for (std::size_t e = 0; e < sigma.size(); ++e) average_[e] += alpha * (sigma[e] - average_[e]);
+}
+
+void StressHistory::remap(const std::vector<Index>& tet_parent) {
+  std::vector<Mat3> next(tet_parent.size());
+  for (std::size_t e = 0; e < tet_parent.size(); ++e) next[e] = average_[tet_parent[e]];
+  average_ = std::move(next);
+}
+
+}  // namespace shatter

@@ -1,0 +1,82 @@
+// Crack planning by the maximum tensile stress criterion (method.md §2.5): crack origins, planes,
+// radii and the tets each crack marks; a time-averaged stress state (after Bao et al. 2007) as a
+// less instantaneous criterion.
+#pragma once
+
+#include <vector>
+
+#include "shatter/core/types.h"
+#include "shatter/fem/material.h"
+#include "shatter/fracture/stress.h"
+#include "shatter/mesh/tet_mesh.h"
+#include "shatter/fracture/adjacency.h"
+
+namespace shatter {
+
+struct CrackOptions {
+  /// k in r_frac = max(r_min, r_0 min(1, k (sigma / sigma_t - 1))). 0: from the material,
+  /// k = clamp(sigma_t sqrt(pi L) / K_Ic, 0.5, 20) = clamp(sqrt(L / l_ch), 0.5, 20), with L the body
+  /// size and l_ch = (K_Ic / sigma_t)^2 / pi the characteristic length: the stress intensity of a
+  /// body-sized crack at the strength stress over the toughness. Glass and porcelain crack far,
+  /// tough materials (steel, or K_Ic unknown: k = 0.5) little.
+  double brittleness = 0;
+  /// r_0 = radius_fraction x L, L = the diagonal of the mesh's bounding box.
+  double radius_fraction = 1.0;
+  /// r_min = min_radius_edges x the origin tet's longest edge: a crack opens at least its origin's
+  /// neighbourhood.
+  double min_radius_edges = 1.5;
+  /// At most this many cracks per load (0: none).
+  int max_cracks = 4;
+  /// A further origin must lie outside every earlier crack's region and farther than
+  /// separation x r_frac from each earlier origin.
+  double separation = 1.0;
+};
+
+struct CrackPlan {
+  Index origin_tet = -1;       ///< tet index in the planning mesh
+  Vec3 origin = Vec3::Zero();  ///< plane point: the origin tet's centroid, m
+  Vec3 normal = Vec3::UnitX(); ///< unit normal: principal direction of the largest tension
+  double stress = 0;           ///< largest principal stress at the origin, Pa
+  double radius = 0;           ///< r_frac, m
+  bool ductile = false;        ///< origin came from exceeding the maximum plastic strain
+  std::vector<Index> tets;     ///< region: tets reachable from the origin through faces whose
+                               ///< centroids lie within `radius` (sorted)
+};
+
+/// Derived brittleness k (see CrackOptions::brittleness) for a body of size L (m).
+double material_brittleness(const Material& material, double body_size);
+
+/// r_frac rule (see CrackOptions).
+double crack_radius(double stress, double strength, double brittleness, double r0, double r_min);
+
+/// Tets reachable from `origin_tet` through shared faces with centroids within `radius` of `center`
+/// (sorted). The origin tet is always included.
+std::vector<Index> crack_region(const TetMesh& mesh, const NodeTets& incidence, Index origin_tet,
+                                const Vec3& center, double radius);
+
+/// Plan up to max_cracks cracks: origins are tets whose largest principal stress exceeds the
+/// tensile strength, by decreasing stress (ties: lower tet index), each outside earlier regions.
+/// `ductile_origins` (tets over the maximum plastic strain) come first, with radius r_min.
+std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStress>& stress,
+                                   const Material& material, const CrackOptions& options = {},
+                                   const std::vector<Index>& ductile_origins = {});
+
+/// Exponentially time-averaged stress per tet: sigma_avg += (1 - exp(-dt / tau)) (sigma - sigma_avg).
+/// A stress must persist for about tau to count fully, so a one-step spike does not crack a body
+/// that a sustained load of the same size would (the idea of Bao et al. 2007's time averaging).
+class StressHistory {
+ public:
+  StressHistory(Index num_tets, double time_constant);
+  /// Fold in the stresses (Pa, #tets) held for dt seconds.
+  void update(const std::vector<Mat3>& sigma, double dt);
+  /// After a cut: tet e of the new mesh inherits the average of tet_parent[e].
+  void remap(const std::vector<Index>& tet_parent);
+  [[nodiscard]] const std::vector<Mat3>& averaged() const { return average_; }
+  [[nodiscard]] double time_constant() const { return tau_; }
+
+ private:
+  std::vector<Mat3> average_;
+  double tau_;
+};
+
+}  // namespace shatter

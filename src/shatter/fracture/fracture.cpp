@@ -1,0 +1,70 @@
+#include "shatter/fracture/fracture.h"
+
+#include <numeric>
+
+#include "shatter/core/assert.h"
+#include "shatter/mesh/topology.h"
+
+namespace shatter {
+
+FractureResult fracture(const TetMesh& rest, const std::vector<Vec3>& deformed, const Material& material,
+                        ModelKind model, const FractureOptions& options) {
+  return fracture_with_stress(rest, deformed, compute_stresses(rest, deformed, material, model), material,
+                              options);
+}
+
+FractureResult fracture_with_stress(const TetMesh& rest, const std::vector<Vec3>& deformed,
+                                    std::vector<TetStress> stress, const Material& material,
+                                    const FractureOptions& options) {
+  SHATTER_CHECK(deformed.size() == rest.positions.size() && stress.size() == rest.tets.size());
+  FractureResult r;
+  r.stress = std::move(stress);
+  r.plastic = apply_plasticity(rest, deformed, r.stress, material, options.plastic_strain, options.plasticity);
+  r.mesh = rest;
+  r.mesh.positions = r.plastic.rest_positions;
+  r.deformed = deformed;
+  r.plastic_strain = r.plastic.plastic_strain;
+  r.node_parent.resize(rest.positions.size());
+  std::iota(r.node_parent.begin(), r.node_parent.end(), Index(0));
+  r.tet_parent.resize(rest.tets.size());
+  std::iota(r.tet_parent.begin(), r.tet_parent.end(), Index(0));
+
+  const std::vector<CrackPlan> plans = plan_cracks(r.mesh, r.stress, material, options.crack, r.plastic.failed);
+  for (std::size_t k = 0; k < plans.size(); ++k) {
+    CrackEvent ev;
+    ev.plan = plans[k];
+    const std::vector<Index> region =
+        k == 0 ? plans[k].tets
+               : crack_region(r.mesh, node_tets(r.mesh), plans[k].origin_tet, plans[k].origin, plans[k].radius);
+    const CutResult cut = cut_mesh(r.mesh, {.point = plans[k].origin, .normal = plans[k].normal}, region, options.cut);
+    ev.tets_marked = static_cast<Index>(region.size());
+    ev.tets_split = cut.tets_split;
+    ev.edge_nodes = cut.edge_nodes;
+    ev.nodes_duplicated = cut.nodes_duplicated;
+    ev.faces_cut = cut.faces_cut;
+    // Carry per-node and per-tet data through the cut.
+    std::vector<Vec3> x(cut.node_origin.size());
+    std::vector<Index> np(cut.node_origin.size());
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      const NodeOrigin& o = cut.node_origin[i];
+      x[i] = o.a == o.b ? r.deformed[o.a] : Vec3((1.0 - o.t) * r.deformed[o.a] + o.t * r.deformed[o.b]);
+      np[i] = r.node_parent[o.t <= 0.5 ? o.a : o.b];
+    }
+    std::vector<Index> tp(cut.tet_parent.size());
+    std::vector<double> ps(cut.tet_parent.size());
+    for (std::size_t e = 0; e < tp.size(); ++e) {
+      tp[e] = r.tet_parent[cut.tet_parent[e]];
+      ps[e] = r.plastic_strain[cut.tet_parent[e]];
+    }
+    r.mesh = cut.mesh;
+    r.deformed = std::move(x);
+    r.node_parent = std::move(np);
+    r.tet_parent = std::move(tp);
+    r.plastic_strain = std::move(ps);
+    r.events.push_back(std::move(ev));
+  }
+  r.fragments = extract_fragments(r.mesh, material.density);
+  return r;
+}
+
+}  // namespace shatter

@@ -1,0 +1,60 @@
+// Fracture and plasticity of a body from a static solution (method.md §2.4-2.5): stresses, plastic
+// rest-shape update, crack planning, cutting and the resulting fragments, in one call.
+#pragma once
+
+#include <vector>
+
+#include "shatter/core/types.h"
+#include "shatter/fem/constitutive.h"
+#include "shatter/fem/material.h"
+#include "shatter/fracture/crack.h"
+#include "shatter/fracture/cut.h"
+#include "shatter/fracture/fragments.h"
+#include "shatter/fracture/plasticity.h"
+#include "shatter/fracture/stress.h"
+#include "shatter/mesh/tet_mesh.h"
+
+namespace shatter {
+
+struct FractureOptions {
+  CrackOptions crack;
+  CutOptions cut;
+  PlasticityOptions plasticity;
+  /// Accumulated plastic strain per tet of the rest mesh from earlier events (empty: zeros).
+  std::vector<double> plastic_strain;
+};
+
+/// One crack: its plan (origin, normal, radius, region in the mesh it was planned on) and what the
+/// cut did.
+struct CrackEvent {
+  CrackPlan plan;
+  Index tets_marked = 0;       ///< tets in the crack region when it was cut
+  Index tets_split = 0;
+  Index edge_nodes = 0;
+  Index nodes_duplicated = 0;
+  Index faces_cut = 0;
+};
+
+struct FractureResult {
+  TetMesh mesh;                        ///< rest mesh after plasticity and every cut
+  std::vector<Vec3> deformed;          ///< deformed positions of mesh's nodes, m (#nodes)
+  std::vector<Index> node_parent;      ///< input node each node came from (a node made on a split
+                                       ///< edge: its nearer end) (#nodes)
+  std::vector<Index> tet_parent;       ///< input tet of each tet (#tets)
+  std::vector<double> plastic_strain;  ///< accumulated plastic strain per tet of mesh (#tets)
+  std::vector<TetStress> stress;       ///< stress per input tet
+  PlasticResult plastic;               ///< the plastic event on the input mesh
+  std::vector<CrackEvent> events;      ///< cracks in the order cut
+  std::vector<Fragment> fragments;     ///< components of mesh (maps index into mesh); one if unbroken
+};
+
+/// Stresses of `deformed` (m, #nodes of rest), then plasticity, cracks and fragments.
+FractureResult fracture(const TetMesh& rest, const std::vector<Vec3>& deformed, const Material& material,
+                        ModelKind model, const FractureOptions& options = {});
+
+/// The same from given per-tet stresses (e.g. a time-averaged StressHistory).
+FractureResult fracture_with_stress(const TetMesh& rest, const std::vector<Vec3>& deformed,
+                                    std::vector<TetStress> stress, const Material& material,
+                                    const FractureOptions& options = {});
+
+}  // namespace shatter

@@ -1,0 +1,35 @@
+// Per-tet stress analysis of a deformed state: Cauchy stress, principal stresses and directions, and
+// the signed display stress (method.md §2.5; tension positive).
+#pragma once
+
+#include <vector>
+
+#include "shatter/core/types.h"
+#include "shatter/fem/constitutive.h"
+#include "shatter/fem/material.h"
+#include "shatter/mesh/tet_mesh.h"
+
+namespace shatter {
+
+struct TetStress {
+  Mat3 sigma = Mat3::Zero();       ///< Cauchy stress, Pa
+  Vec3 principal = Vec3::Zero();   ///< principal stresses, Pa, descending (tension positive)
+  Mat3 directions = Mat3::Identity();  ///< unit principal directions as columns (same order)
+  /// The larger in magnitude of the largest tensile and largest compressive principal stress,
+  /// signed (Pa): positive = tension (drawn red), negative = compression (green).
+  double display = 0;
+  double von_mises = 0;            ///< von Mises equivalent stress, Pa
+};
+
+/// Principal values, directions, display and von Mises stress of one Cauchy stress tensor.
+TetStress analyze_stress(const Mat3& sigma);
+
+/// Per tet of `rest` (#tets): the Cauchy stress of the deformed positions `deformed` (m, #nodes).
+/// Parallel over tets; the result does not depend on the thread count.
+std::vector<TetStress> compute_stresses(const TetMesh& rest, const std::vector<Vec3>& deformed,
+                                        const Material& material, ModelKind model);
+
+/// The same from given stress tensors (Pa, #tets), e.g. from another solver or a test field.
+std::vector<TetStress> analyze_stresses(const std::vector<Mat3>& sigma);
+
+}  // namespace shatter
