@@ -1,0 +1,58 @@
+// Structured tetrahedral meshes of surfaces of revolution (a closed (r, y) profile revolved about
+// Y), suited to thin walls: the profile is resampled to the edge length and triangulated (ear
+// clipping, best ear first, then Lawson flips to the constrained Delaunay triangulation of the
+// resampled polygon; no interior points, so it is meant for profiles a few edge lengths thick at
+// most), then swept about Y in N equal angular segments. Each triangle times segment is a prism
+// cut into 3 tets: every quadrilateral face is split through its lowest-numbered vertex and the
+// prism's lowest vertex is joined to the rest (Dompierre et al. 1999), so neighbouring prisms
+// always conform. Profile vertices on the axis (r = 0) are one node shared by all segments, which
+// turns the prisms touching the axis into a pyramid (2 tets) or a tet; axis nodes are numbered
+// first so they are always the lowest vertex of their prism.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "shatter/core/error.h"
+#include "shatter/mesh/tet_mesh.h"
+#include "shatter/meshing/sdf.h"
+
+namespace shatter {
+
+/// A revolution profile and the transform placing it (a `revolution` node, possibly under
+/// transforms), or nullopt for any other tree.
+struct RevolvedShape {
+  std::vector<Vec2> profile;
+  Sdf::Transform transform;
+};
+std::optional<RevolvedShape> revolved_shape(const Sdf& sdf);
+
+struct RevolveDef {
+  /// Profile spacing and circumferential spacing at the largest radius, m. If 0, chosen to get
+  /// about `target_tets`.
+  double edge_length = 0.0;
+  std::int64_t target_tets = 0;
+  /// Angular segments; 0: max(min_segments, round(2 pi r_max / edge_length)).
+  int segments = 0;
+  int min_segments = 6;
+};
+
+struct RevolveReport {
+  double edge_length = 0;          ///< m
+  int segments = 0;                ///< angular segments N
+  std::int64_t profile_points = 0; ///< resampled profile vertices
+  std::int64_t triangles = 0;      ///< profile triangles
+  double exact_volume = 0;         ///< Pappus volume of the profile (after the transform), m^3
+};
+
+/// Triangulation of a simple closed polygon (either orientation) without new points: ear
+/// clipping, then Lawson flips of interior edges to the constrained Delaunay triangulation.
+/// Triangles counter-clockwise, as indices into `polygon`. Error if the polygon is not simple.
+Result<std::vector<std::array<Index, 3>>> triangulate_polygon(const std::vector<Vec2>& polygon);
+
+/// Mesh a revolution (revolved_shape(sdf) must succeed). Nodes: axis vertices, then N per
+/// off-axis profile vertex; tets positively oriented. Deterministic.
+Result<TetMesh> mesh_revolution(const Sdf& sdf, const RevolveDef& def, RevolveReport* report = nullptr);
+
+}  // namespace shatter

@@ -1,0 +1,484 @@
+// Isosurface stuffing (Labelle & Shewchuk 2007) on a uniform BCC lattice.
+//
+// Lattice points are kept in doubled integer coordinates P: black points (cube corners) have all
+// coordinates even, red points (cube centres) all odd; position = origin + P * h / 2. Long edges
+// join same-colour neighbours (P +- 2 e_a, length h), short edges join a red point to the 8 corners
+// of its cube (P + (+-1, +-1, +-1), length h sqrt(3) / 2). Each BCC tet is a black edge
+// (B, B + 2 e_a) with two consecutive cube centres around it (B + e_a +- e_b +- e_c).
+#include "shatter/meshing/stuffing.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "shatter/core/parallel.h"
+#include "shatter/mesh/topology.h"
+#include "shatter/mesh/validate.h"
+
+namespace shatter {
+namespace {
+
+using Key = std::int64_t;  // lattice id, or kCutBase + owner * kSlots + slot for a cut point
+using IVec3 = Eigen::Vector3i;
+constexpr int kSlots = 11;  // per lattice point: 3 long edges (+x, +y, +z), 8 short edges (red only)
+
+struct Lattice {
+  Vec3 origin = Vec3::Zero();
+  double h = 0;
+  IVec3 n = IVec3::Zero();  // cubes per axis
+  std::int64_t nb = 0, nr = 0;
+
+  [[nodiscard]] bool valid(const IVec3& p) const {
+    const bool odd = (p.x() & 1) != 0;
+    for (int a = 0; a < 3; ++a) {
+      if (((p[a] & 1) != 0) != odd) return false;
+      if (odd ? (p[a] < 1 || p[a] > 2 * n[a] - 1) : (p[a] < 0 || p[a] > 2 * n[a])) return false;
+    }
+    return true;
+  }
+  [[nodiscard]] std::int64_t id(const IVec3& p) const {
+    if ((p.x() & 1) == 0)
+      return p.x() / 2 + std::int64_t(n.x() + 1) * (p.y() / 2 + std::int64_t(n.y() + 1) * (p.z() / 2));
+    return nb + (p.x() - 1) / 2 + std::int64_t(n.x()) * ((p.y() - 1) / 2 + std::int64_t(n.y()) * ((p.z() - 1) / 2));
+  }
+  [[nodiscard]] IVec3 coord(std::int64_t i) const {
+    if (i < nb) {
+      const std::int64_t sx = n.x() + 1, sy = n.y() + 1;
+      return IVec3(int(2 * (i % sx)), int(2 * ((i / sx) % sy)), int(2 * (i / (sx * sy))));
+    }
+    i -= nb;
+    const std::int64_t sx = n.x(), sy = n.y();
+    return IVec3(int(2 * (i % sx) + 1), int(2 * ((i / sx) % sy) + 1), int(2 * (i / (sx * sy)) + 1));
+  }
+  [[nodiscard]] Vec3 position(const IVec3& p) const { return origin + p.cast<double>() * (0.5 * h); }
+};
+
+// The 14 lattice directions: 0..5 long (+x, +y, +z, -x, -y, -z), 6..13 short (sign bits x, y, z).
+IVec3 direction(int d) {
+  if (d < 6) {
+    IVec3 v = IVec3::Zero();
+    v[d % 3] = d < 3 ? 2 : -2;
+    return v;
+  }
+  const int bits = d - 6;
+  return IVec3((bits & 1) ? 1 : -1, (bits & 2) ? 1 : -1, (bits & 4) ? 1 : -1);
+}
+int short_bits(const IVec3& d) { return (d.x() > 0 ? 1 : 0) | (d.y() > 0 ? 2 : 0) | (d.z() > 0 ? 4 : 0); }
+
+// Owner point and slot of the edge (p, p + d).
+struct Slot {
+  IVec3 owner;
+  int slot;
+};
+Slot edge_slot(const IVec3& p, const IVec3& d) {
+  if (d.cwiseAbs().sum() == 2) {  // long
+    int a = 0;
+    d.cwiseAbs().maxCoeff(&a);
+    return d[a] > 0 ? Slot{p, a} : Slot{p + d, a};
+  }
+  if ((p.x() & 1) != 0) return {p, 3 + short_bits(d)};
+  return {p + d, 3 + short_bits(-d)};
+}
+
+struct Stuffer {
+  const Sdf& sdf;
+  const StuffingDef& def;
+  Lattice lat;
+  std::int64_t nl = 0;                 // lattice points
+  std::vector<double> value;           // sdf at lattice points (#nl)
+  std::vector<double> cut_t;           // cut parameter from owner, or -1 (#nl x kSlots)
+  std::vector<std::uint8_t> warped;    // (#nl)
+  std::vector<Vec3> pos;               // lattice positions after warping (#nl)
+
+  [[nodiscard]] Key cut_key(const IVec3& p, const IVec3& q) const {
+    const Slot s = edge_slot(p, q - p);
+    return nl + lat.id(s.owner) * kSlots + s.slot;
+  }
+  [[nodiscard]] Vec3 key_position(Key k) const {
+    if (k < nl) return pos[static_cast<std::size_t>(k)];
+    const std::int64_t owner = (k - nl) / kSlots;
+    const int slot = static_cast<int>((k - nl) % kSlots);
+    const IVec3 p = lat.coord(owner);
+    const IVec3 q = p + (slot < 3 ? direction(slot) : direction(6 + slot - 3));
+    const double t = cut_t[static_cast<std::size_t>(k - nl)];
+    const Vec3 a = lat.position(p), b = lat.position(q);
+    return a + t * (b - a);
+  }
+  [[nodiscard]] int sign(std::int64_t i) const {
+    if (warped[static_cast<std::size_t>(i)]) return 0;
+    const double v = value[static_cast<std::size_t>(i)];
+    return v < 0 ? -1 : (v > 0 ? 1 : 0);
+  }
+
+  // Root of the sdf on the segment a + t (b - a), t in (0, 1), fa and fb of opposite signs
+  // (false position with the Illinois modification).
+  [[nodiscard]] double root(const Vec3& a, const Vec3& b, double fa, double fb) const {
+    double ta = 0, tb = 1;
+    int side = 0;
+    double t = 0.5;
+    for (int it = 0; it < def.root_iterations; ++it) {
+      t = (ta * fb - tb * fa) / (fb - fa);
+      if (!(t > ta && t < tb)) t = 0.5 * (ta + tb);
+      const double ft = sdf(a + t * (b - a));
+      if (ft == 0) break;
+      if ((ft < 0) == (fa < 0)) {
+        ta = t;
+        fa = ft;
+        if (side == -1) fb *= 0.5;
+        side = -1;
+      } else {
+        tb = t;
+        fb = ft;
+        if (side == 1) fa *= 0.5;
+        side = 1;
+      }
+      if (tb - ta < 1e-12) break;
+    }
+    return std::clamp(t, 1e-9, 1.0 - 1e-9);
+  }
+
+  void evaluate() {
+    value.assign(static_cast<std::size_t>(nl), 0.0);
+    parallel_for(0, nl, [&](std::int64_t i) { value[static_cast<std::size_t>(i)] = sdf(lat.position(lat.coord(i))); }, 256);
+  }
+
+  void cut_points() {
+    cut_t.assign(static_cast<std::size_t>(nl * kSlots), -1.0);
+    parallel_for(0, nl, [&](std::int64_t i) {
+      const IVec3 p = lat.coord(i);
+      const double fp = value[static_cast<std::size_t>(i)];
+      const bool red = (p.x() & 1) != 0;
+      for (int s = 0; s < (red ? kSlots : 3); ++s) {
+        const IVec3 q = p + (s < 3 ? direction(s) : direction(6 + s - 3));
+        if (!lat.valid(q)) continue;
+        const double fq = value[static_cast<std::size_t>(lat.id(q))];
+        if (!((fp < 0 && fq > 0) || (fp > 0 && fq < 0))) continue;
+        cut_t[static_cast<std::size_t>(i * kSlots + s)] = root(lat.position(p), lat.position(q), fp, fq);
+      }
+    }, 256);
+  }
+
+  // A lattice point within alpha * edge length of a cut point on one of its edges is warped onto
+  // the nearest such cut point (Labelle & Shewchuk 2007, section 3).
+  void warp() {
+    warped.assign(static_cast<std::size_t>(nl), 0);
+    pos.resize(static_cast<std::size_t>(nl));
+    parallel_for(0, nl, [&](std::int64_t i) {
+      const IVec3 p = lat.coord(i);
+      const Vec3 x = lat.position(p);
+      double best = std::numeric_limits<double>::infinity();
+      Vec3 target = x;
+      for (int d = 0; d < 14; ++d) {
+        const IVec3 q = p + direction(d);
+        if (!lat.valid(q)) continue;
+        const Slot s = edge_slot(p, q - p);
+        const double t = cut_t[static_cast<std::size_t>(lat.id(s.owner) * kSlots + s.slot)];
+        if (t < 0) continue;
+        const double frac = s.owner == p ? t : 1.0 - t;
+        const bool is_long = d < 6;
+        const double alpha = is_long ? def.alpha_long : def.alpha_short;
+        const double length = is_long ? lat.h : lat.h * std::sqrt(3.0) * 0.5;
+        if (frac < alpha && frac * length < best) {
+          best = frac * length;
+          target = x + frac * (lat.position(q) - x);
+        }
+      }
+      warped[static_cast<std::size_t>(i)] = std::isfinite(best) ? 1 : 0;
+      pos[static_cast<std::size_t>(i)] = target;
+    }, 256);
+  }
+
+  // Clip one BCC tet to its non-positive part and cut that into tets (pulling triangulation).
+  void clip_tet(const std::array<IVec3, 4>& p, std::vector<std::array<Key, 4>>& out) const {
+    std::array<Key, 4> k;
+    std::array<int, 4> s;
+    int nneg = 0, npos = 0;
+    for (int i = 0; i < 4; ++i) {
+      k[i] = lat.id(p[i]);
+      s[i] = sign(k[i]);
+      nneg += s[i] < 0;
+      npos += s[i] > 0;
+    }
+    if (nneg == 0) {
+      // All-zero tets (every corner warped onto the surface) are kept when their centre is inside.
+      if (npos == 0) {
+        Vec3 c = Vec3::Zero();
+        for (Key q : k) c += key_position(q);
+        if (sdf(0.25 * c) < 0) out.push_back(k);
+      }
+      return;
+    }
+    if (npos == 0) {
+      out.push_back(k);
+      return;
+    }
+    auto cut = [&](int i, int j) { return cut_key(p[i], p[j]); };
+    auto crosses = [&](int i, int j) { return (s[i] < 0 && s[j] > 0) || (s[i] > 0 && s[j] < 0); };
+    // Faces of the clipped polytope: the four clipped tet faces, then the cap on the surface.
+    std::array<std::array<Key, 4>, 5> faces;
+    std::array<int, 5> sizes{};
+    static constexpr int kFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+    for (int f = 0; f < 4; ++f) {
+      for (int m = 0; m < 3; ++m) {
+        const int i = kFaces[f][m], j = kFaces[f][(m + 1) % 3];
+        if (s[i] <= 0) faces[f][sizes[f]++] = k[i];
+        if (crosses(i, j)) faces[f][sizes[f]++] = cut(i, j);
+      }
+    }
+    int neg[4], posv[4], zero[4], nz = 0;
+    nneg = npos = 0;
+    for (int i = 0; i < 4; ++i) {
+      if (s[i] < 0) neg[nneg++] = i;
+      else if (s[i] > 0) posv[npos++] = i;
+      else zero[nz++] = i;
+    }
+    if (nneg == 2 && npos == 2) {
+      faces[4] = {cut(neg[0], posv[0]), cut(neg[0], posv[1]), cut(neg[1], posv[1]), cut(neg[1], posv[0])};
+      sizes[4] = 4;
+    } else {
+      for (int a = 0; a < nneg; ++a)
+        for (int b = 0; b < npos; ++b) faces[4][sizes[4]++] = cut(neg[a], posv[b]);
+      for (int z = 0; z < nz; ++z) faces[4][sizes[4]++] = k[zero[z]];
+    }
+    // Pull from the polytope vertex that gives the best worst tet: any vertex of a convex polytope
+    // gives a valid decomposition, and the shared faces' splits do not depend on it. The one
+    // non-planar face is the 4-point cap; its vertices are not used as apex. A quadrilateral BCC face
+    // that contains the apex is split as a fan from it, so the apex must be that face's lowest key
+    // (the split its neighbour makes).
+    std::array<Key, 10> verts;
+    int nv = 0;
+    for (int f = 0; f < 5; ++f)
+      for (int i = 0; i < sizes[f]; ++i)
+        if (std::find(verts.begin(), verts.begin() + nv, faces[f][i]) == verts.begin() + nv) verts[nv++] = faces[f][i];
+    std::sort(verts.begin(), verts.begin() + nv);
+    std::vector<std::array<Key, 4>> best, trial;
+    double best_q = -std::numeric_limits<double>::infinity();
+    for (int c = 0; c < nv; ++c) {
+      if (sizes[4] == 4 && std::find(faces[4].begin(), faces[4].end(), verts[c]) != faces[4].end()) continue;
+      bool allowed = true;
+      for (int f = 0; f < 4; ++f)
+        if (sizes[f] == 4 && std::find(faces[f].begin(), faces[f].end(), verts[c]) != faces[f].end() &&
+            *std::min_element(faces[f].begin(), faces[f].end()) != verts[c])
+          allowed = false;
+      if (!allowed) continue;
+      trial.clear();
+      const double q = pull(verts[c], faces, sizes, trial);
+      if (q > best_q) {
+        best_q = q;
+        best.swap(trial);
+      }
+    }
+    out.insert(out.end(), best.begin(), best.end());
+  }
+
+  // Shape measure of a tet: |V| / (sum of squared edge lengths)^(3/2); 0 when flat.
+  static double tet_shape(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+    const double l2 = (b - a).squaredNorm() + (c - a).squaredNorm() + (d - a).squaredNorm() +
+                      (c - b).squaredNorm() + (d - b).squaredNorm() + (d - c).squaredNorm();
+    return std::abs(signed_volume(a, b, c, d)) / (l2 * std::sqrt(l2));
+  }
+
+  // Tets of the pulling triangulation from v; returns the smallest tet shape measure.
+  double pull(Key v, const std::array<std::array<Key, 4>, 5>& faces, const std::array<int, 5>& sizes,
+              std::vector<std::array<Key, 4>>& out) const {
+    const Vec3 xv = key_position(v);
+    double worst = std::numeric_limits<double>::infinity();
+    auto emit = [&](Key a, Key b, Key c) {
+      out.push_back({v, a, b, c});
+      worst = std::min(worst, tet_shape(xv, key_position(a), key_position(b), key_position(c)));
+    };
+    for (int f = 0; f < 5; ++f) {
+      const int n = sizes[f];
+      if (n < 3) continue;
+      const auto& poly = faces[f];
+      if (std::find(poly.begin(), poly.begin() + n, v) != poly.begin() + n) continue;
+      if (n == 3) {
+        emit(poly[0], poly[1], poly[2]);
+        continue;
+      }
+      int m = 0;
+      if (f < 4) {
+        // Shared with the neighbouring BCC tet: split through the lowest key (both sides agree).
+        for (int i = 1; i < 4; ++i)
+          if (poly[i] < poly[m]) m = i;
+      } else {
+        // The cap is on the boundary: take the diagonal that gives the fatter pair of tets.
+        std::array<Vec3, 4> x;
+        for (int i = 0; i < 4; ++i) x[i] = key_position(poly[i]);
+        auto pair_min = [&](int r) {
+          const double v1 = signed_volume(xv, x[r], x[(r + 1) % 4], x[(r + 2) % 4]);
+          const double v2 = signed_volume(xv, x[r], x[(r + 2) % 4], x[(r + 3) % 4]);
+          const double sgn = (v1 + v2) >= 0 ? 1.0 : -1.0;
+          return std::min(sgn * v1, sgn * v2);
+        };
+        m = pair_min(1) > pair_min(0) ? 1 : 0;
+      }
+      emit(poly[m], poly[(m + 1) % 4], poly[(m + 2) % 4]);
+      emit(poly[m], poly[(m + 2) % 4], poly[(m + 3) % 4]);
+    }
+    return worst;
+  }
+
+  // All output tets as keys, black points in lattice order (z slabs in parallel, joined in order).
+  std::vector<std::array<Key, 4>> tets() const {
+    const int slabs = lat.n.z() + 1;
+    std::vector<std::vector<std::array<Key, 4>>> per_slab(static_cast<std::size_t>(slabs));
+    parallel_for(0, slabs, [&](std::int64_t kz) {
+      auto& out = per_slab[static_cast<std::size_t>(kz)];
+      for (int jy = 0; jy <= lat.n.y(); ++jy)
+        for (int ix = 0; ix <= lat.n.x(); ++ix) {
+          const IVec3 b(2 * ix, 2 * jy, 2 * static_cast<int>(kz));
+          for (int a = 0; a < 3; ++a) {
+            IVec3 ea = IVec3::Zero();
+            ea[a] = 1;
+            if (!lat.valid(b + 2 * ea)) continue;
+            IVec3 eb = IVec3::Zero(), ec = IVec3::Zero();
+            eb[(a + 1) % 3] = 1;
+            ec[(a + 2) % 3] = 1;
+            static constexpr int kRing[4][2] = {{1, 1}, {-1, 1}, {-1, -1}, {1, -1}};
+            for (int q = 0; q < 4; ++q) {
+              const IVec3 r1 = b + ea + kRing[q][0] * eb + kRing[q][1] * ec;
+              const IVec3 r2 = b + ea + kRing[(q + 1) % 4][0] * eb + kRing[(q + 1) % 4][1] * ec;
+              if (!lat.valid(r1) || !lat.valid(r2)) continue;
+              clip_tet({b, b + 2 * ea, r1, r2}, out);
+            }
+          }
+        }
+    }, 2);
+    std::vector<std::array<Key, 4>> all;
+    std::size_t total = 0;
+    for (const auto& v : per_slab) total += v.size();
+    all.reserve(total);
+    for (const auto& v : per_slab) all.insert(all.end(), v.begin(), v.end());
+    return all;
+  }
+};
+
+Result<TetMesh> stuff_once(const Sdf& sdf, const StuffingDef& def, double h, StuffingReport* report) {
+  const Aabb box = sdf.bounds();
+  if (box.empty() || !box.min.allFinite() || !box.max.allFinite())
+    return field_error("shape", "the shape has empty or infinite bounds: nothing to mesh");
+  Stuffer st{sdf, def, {}, 0, {}, {}, {}, {}};
+  Lattice& lat = st.lat;
+  lat.h = h;
+  const Vec3 ext = box.extent();
+  double count = 1;
+  for (int a = 0; a < 3; ++a) {
+    const double cells = std::ceil(ext[a] / h) + 2;
+    count *= cells + 1;
+    if (!(cells < 1e6)) count = std::numeric_limits<double>::infinity();
+    lat.n[a] = static_cast<int>(std::min(cells, 1e6));
+  }
+  if (!(2 * count <= static_cast<double>(def.max_lattice_vertices)))
+    return field_error("edge_length", "edge length " + std::to_string(h) + " m needs a lattice of about " +
+                                          std::to_string(2 * count) + " points (limit " +
+                                          std::to_string(def.max_lattice_vertices) + "): expected a larger edge length");
+  lat.origin = 0.5 * (box.min + box.max) - 0.5 * h * lat.n.cast<double>();
+  lat.nb = std::int64_t(lat.n.x() + 1) * (lat.n.y() + 1) * (lat.n.z() + 1);
+  lat.nr = std::int64_t(lat.n.x()) * lat.n.y() * lat.n.z();
+  st.nl = lat.nb + lat.nr;
+
+  st.evaluate();
+  for (double v : st.value)
+    if (std::isnan(v)) return field_error("shape", "the signed distance is NaN somewhere in the lattice");
+  st.cut_points();
+  st.warp();
+  std::vector<std::array<Key, 4>> key_tets = st.tets();
+  if (key_tets.empty())
+    return field_error("edge_length", "no tets: the shape is thinner than the edge length " + std::to_string(h) +
+                                          " m; expected a smaller edge length");
+
+  // Number the used keys: lattice points in lattice order, then cut points in slot order.
+  const std::int64_t nkeys = st.nl * (1 + kSlots);
+  std::vector<Index> node_of(static_cast<std::size_t>(nkeys), -1);
+  for (const auto& t : key_tets)
+    for (Key q : t) node_of[static_cast<std::size_t>(q)] = 0;
+  TetMesh mesh;
+  std::int64_t cuts = 0;
+  for (std::int64_t q = 0; q < nkeys; ++q) {
+    if (node_of[static_cast<std::size_t>(q)] < 0) continue;
+    if (mesh.positions.size() >= static_cast<std::size_t>(std::numeric_limits<Index>::max()))
+      return field_error("edge_length", "mesh too large for 32-bit indices");
+    node_of[static_cast<std::size_t>(q)] = static_cast<Index>(mesh.positions.size());
+    mesh.positions.push_back(st.key_position(q));
+    cuts += q >= st.nl;
+  }
+  mesh.tets.resize(key_tets.size());
+  parallel_for(0, static_cast<std::int64_t>(key_tets.size()), [&](std::int64_t e) {
+    TetIndices t;
+    for (int c = 0; c < 4; ++c) t[c] = node_of[static_cast<std::size_t>(key_tets[static_cast<std::size_t>(e)][c])];
+    const double v = signed_volume(mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]], mesh.positions[t[3]]);
+    if (v < 0) std::swap(t[2], t[3]);
+    mesh.tets[static_cast<std::size_t>(e)] = t;
+  });
+  if (report) {
+    report->edge_length = h;
+    report->lattice_vertices = st.nl;
+    report->cut_points = cuts;
+    std::int64_t w = 0;
+    for (auto x : st.warped) w += x;
+    report->warped = w;
+  }
+  const ValidationReport vr = validate_mesh(mesh);
+  if (vr.has_errors())
+    return field_error("shape", "stuffing produced an invalid mesh (" + vr.problems.front().message +
+                                    "); the shape may have features thinner than the edge length");
+  return mesh;
+}
+
+}  // namespace
+
+Result<TetMesh> stuff_tets(const Sdf& sdf, const StuffingDef& def, StuffingReport* report) {
+  if (sdf.empty()) return field_error("shape", "no shape given");
+  if (def.edge_length > 0) {
+    if (!std::isfinite(def.edge_length)) return field_error("edge_length", "expected a finite length > 0");
+    return stuff_once(sdf, def, def.edge_length, report);
+  }
+  if (def.edge_length < 0 || std::isnan(def.edge_length))
+    return field_error("edge_length", "expected a length > 0 m, got " + std::to_string(def.edge_length));
+  if (def.target_tets <= 0) return field_error("target_tets", "expected an edge length > 0 or a tet count > 0");
+  // Search h: a BCC lattice has 12 tets per cube of volume h^3, so tets ~ 12 V / h^3; measure V on
+  // a coarse mesh, then correct h by the cube root of the count ratio.
+  const Aabb box = sdf.bounds();
+  if (box.empty() || !box.max.allFinite() || !box.min.allFinite())
+    return field_error("shape", "the shape has empty or infinite bounds: nothing to mesh");
+  double h = box.extent().maxCoeff() / 12.0;
+  int attempts = 0;
+  double volume = 0;
+  for (int i = 0; i < 4 && volume <= 0; ++i, h *= 0.5) {
+    ++attempts;
+    auto coarse = stuff_once(sdf, def, h, nullptr);
+    if (coarse) volume = total_volume(*coarse);
+  }
+  if (!(volume > 0)) return field_error("shape", "the shape is empty or far thinner than its bounds");
+  h = std::cbrt(12.0 * volume / static_cast<double>(def.target_tets));
+  std::optional<TetMesh> best;
+  StuffingReport best_report;
+  double best_err = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 5; ++i) {
+    ++attempts;
+    StuffingReport r;
+    auto m = stuff_once(sdf, def, h, &r);
+    if (!m) {
+      if (best) break;
+      return std::move(m.error());
+    }
+    const double n = static_cast<double>(m->num_tets());
+    const double err = std::abs(std::log(n / static_cast<double>(def.target_tets)));
+    if (err < best_err) {
+      best_err = err;
+      best = std::move(*m);
+      best_report = r;
+    }
+    if (err < 0.05) break;
+    h *= std::cbrt(n / static_cast<double>(def.target_tets));
+  }
+  best_report.attempts = attempts;
+  if (report) *report = best_report;
+  return std::move(*best);
+}
+
+}  // namespace shatter

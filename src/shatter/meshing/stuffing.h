@@ -1,0 +1,49 @@
+// Tetrahedral meshes of implicit shapes by isosurface stuffing on a body-centred cubic lattice
+// (Labelle & Shewchuk 2007, "Isosurface Stuffing: Fast Tetrahedral Meshes with Good Dihedral
+// Angles", SIGGRAPH): BCC lattice of spacing h, cut points where the SDF changes sign along a
+// lattice edge, lattice vertices within alpha * edge length of a cut point warped onto it, and each
+// BCC tet clipped to its non-positive part and cut into tets.
+//
+// Limits: uniform lattice (no grading); sharp edges and corners of the shape are rounded at the
+// scale of h (the boundary interpolates points of the zero set, it does not follow creases); the
+// clipped polytopes are split by a pulling triangulation (quadrilateral faces split through their
+// lowest-numbered vertex, so neighbours always agree; apex chosen for the best worst tet), not by
+// the paper's stencil table with its parity rule, so the paper's 10.7-164.8 degree bounds are not
+// guaranteed; docs/meshing.md gives the bounds measured on the test shapes and assets.
+#pragma once
+
+#include <cstdint>
+
+#include "shatter/core/error.h"
+#include "shatter/mesh/tet_mesh.h"
+#include "shatter/meshing/sdf.h"
+
+namespace shatter {
+
+struct StuffingDef {
+  /// Lattice spacing h (the long BCC edge), m. If 0, chosen to get about `target_tets`.
+  double edge_length = 0.0;
+  /// Wanted number of tets when edge_length == 0 (h searched, within ~10 %).
+  std::int64_t target_tets = 0;
+  /// Warp thresholds as fractions of the edge length (Labelle & Shewchuk 2007, section 3).
+  double alpha_long = 0.24999;
+  double alpha_short = 0.41189;
+  /// False-position iterations for each cut point (distance functions converge in a few).
+  int root_iterations = 16;
+  /// Refuse lattices larger than this (memory guard).
+  std::int64_t max_lattice_vertices = 60'000'000;
+};
+
+struct StuffingReport {
+  double edge_length = 0;             ///< h used, m
+  std::int64_t lattice_vertices = 0;  ///< black + red lattice vertices evaluated
+  std::int64_t cut_points = 0;        ///< cut points kept after warping
+  std::int64_t warped = 0;            ///< lattice vertices warped onto the surface
+  int attempts = 1;                   ///< meshings tried to reach target_tets
+};
+
+/// Mesh the inside (sdf < 0) of the shape. Nodes: used lattice vertices in lattice order, then cut
+/// points. Tets positively oriented. Deterministic: identical output for any thread count.
+Result<TetMesh> stuff_tets(const Sdf& sdf, const StuffingDef& def, StuffingReport* report = nullptr);
+
+}  // namespace shatter

@@ -1,0 +1,77 @@
+// `shatter mesh`: report on stdout, mesh written, non-zero exit and a message on bad input.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "support/test_support.h"
+
+namespace shatter {
+namespace {
+
+bool have_cli() { return !test::cli_path().empty() && std::filesystem::exists(test::cli_path()); }
+
+TEST(CmdMesh, PrimitiveReportAndOutput) {
+  if (!have_cli()) GTEST_SKIP() << "shatter executable not built";
+  test::TempDir dir;
+  const std::string out = dir.file("sphere.vtu");
+  const auto r = test::run_command(test::cli_path() + " mesh --primitive sphere --radius 0.1 -H 0.02 --json -o " + out);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  EXPECT_GT(j["tets"].get<int>(), 1000);
+  EXPECT_EQ(j["reference_kind"], "analytic");
+  EXPECT_LT(std::abs(j["volume_error"].get<double>()), 0.02);
+  EXPECT_GT(j["dihedral_deg"]["min"].get<double>(), 10.0);
+  EXPECT_TRUE(std::filesystem::exists(out));
+}
+
+TEST(CmdMesh, ShapeFileAndErrors) {
+  if (!have_cli()) GTEST_SKIP() << "shatter executable not built";
+  test::TempDir dir;
+  const std::string shape = dir.file("s.json");
+  std::ofstream(shape) << R"({"tets": 2000, "shape": {"type": "union", "children": [
+      {"type": "box", "size": [0.1, 0.1, 0.1]}, {"type": "sphere", "radius": 0.06, "translate": [0.05, 0, 0]}]}})";
+  auto ok = test::run_command(test::cli_path() + " mesh --shape " + shape + " --json");
+  ASSERT_EQ(ok.status, 0) << ok.output;
+  EXPECT_EQ(nlohmann::json::parse(ok.output)["reference_kind"], "extrapolated from h/2");
+
+  std::ofstream(shape) << R"({"tets": 2000, "shape": {"type": "union", "children": [{"type": "sphere", "radius": -1}]}})";
+  auto bad = test::run_command(test::cli_path() + " mesh --shape " + shape + " 2>&1");
+  EXPECT_EQ(bad.status, 3);
+  EXPECT_NE(bad.output.find("shape.children[0].radius"), std::string::npos) << bad.output;
+
+  auto none = test::run_command(test::cli_path() + " mesh --primitive sphere --radius 0.1 2>&1");
+  EXPECT_EQ(none.status, 2) << none.output;
+  auto open = test::run_command(test::cli_path() + " mesh --surface /nonexistent.obj -H 0.1 2>&1");
+  EXPECT_EQ(open.status, 3) << open.output;
+}
+
+TEST(CmdMesh, MethodChoice) {
+  if (!have_cli()) GTEST_SKIP() << "shatter executable not built";
+  const std::string cli = test::cli_path();
+  // A box qualifies for the box-CSG mesher: exact volume.
+  auto box = test::run_command(cli + " mesh --primitive box --size 0.3 0.2 0.1 --tets 500 --json");
+  ASSERT_EQ(box.status, 0) << box.output;
+  const auto jb = nlohmann::json::parse(box.output);
+  EXPECT_EQ(jb["method"], "box-csg");
+  EXPECT_LT(std::abs(jb["volume_error"].get<double>()), 1e-12);
+  auto stuffed = test::run_command(cli + " mesh --primitive box --size 0.3 0.2 0.1 --tets 500 --method stuffing --json");
+  ASSERT_EQ(stuffed.status, 0) << stuffed.output;
+  EXPECT_EQ(nlohmann::json::parse(stuffed.output)["method"], "stuffing");
+  // The vase asset goes to the revolve mesher.
+  auto vase = test::run_command(cli + " mesh --shape " + std::string(SHATTER_SOURCE_DIR) +
+                                "/assets/shapes/vase.json --json");
+  ASSERT_EQ(vase.status, 0) << vase.output;
+  EXPECT_EQ(nlohmann::json::parse(vase.output)["method"], "revolve");
+  // A sphere is neither; an unknown method is a usage error.
+  auto sphere = test::run_command(cli + " mesh --primitive sphere --radius 0.1 -H 0.05 --method structured 2>&1");
+  EXPECT_EQ(sphere.status, 3) << sphere.output;
+  EXPECT_NE(sphere.output.find("not a box CSG or a single revolution"), std::string::npos) << sphere.output;
+  auto bogus = test::run_command(cli + " mesh --primitive sphere --radius 0.1 -H 0.05 --method magic 2>&1");
+  EXPECT_EQ(bogus.status, 2) << bogus.output;
+}
+
+}  // namespace
+}  // namespace shatter
