@@ -1,0 +1,185 @@
+// Strict JSON reading with file + field-path errors (see json_reader.h).
+#include "shatter/scene/json_reader.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace shatter::json_input {
+
+Where Where::key(std::string_view k) const {
+  Where w{file, path};
+  if (!w.path.empty()) w.path += ".";
+  w.path += k;
+  return w;
+}
+
+Where Where::index(std::size_t i) const {
+  return Where{file, path + "[" + std::to_string(i) + "]"};
+}
+
+Error Where::error(std::string message) const {
+  Error e = field_error(path.empty() ? std::string("(top level)") : path, std::move(message));
+  if (file) e.file = *file;
+  return e;
+}
+
+Result<Json> parse_json(std::string_view text, const std::string& file) {
+  try {
+    return Json::parse(text.begin(), text.end());
+  } catch (const Json::parse_error& e) {
+    // Turn the byte position into a line number.
+    const std::size_t byte = std::min<std::size_t>(e.byte > 0 ? e.byte - 1 : 0, text.size());
+    const std::int64_t line = 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(byte), '\n');
+    std::string what = e.what();
+    // nlohmann's text: "[json.exception.parse_error.101] parse error at line 3, column 5: ..."
+    const std::size_t colon = what.find(": ");
+    if (colon != std::string::npos) what = what.substr(colon + 2);
+    return line_error(file, line, "invalid JSON: " + what);
+  } catch (const std::exception& e) {
+    return file_error(file, std::string("invalid JSON: ") + e.what());
+  }
+}
+
+std::string type_name(const Json& value) {
+  switch (value.type()) {
+    case Json::value_t::null: return "null";
+    case Json::value_t::object: return "an object";
+    case Json::value_t::array: return "an array";
+    case Json::value_t::string: return "a string (\"" + value.get<std::string>() + "\")";
+    case Json::value_t::boolean: return value.get<bool>() ? "true" : "false";
+    case Json::value_t::number_integer:
+    case Json::value_t::number_unsigned:
+    case Json::value_t::number_float: return "the number " + value.dump();
+    default: return "an unsupported value";
+  }
+}
+
+ObjectReader::ObjectReader(const Json& value, Where where) : object_(&value), where_(std::move(where)) {
+  if (!value.is_object()) status_ = where_.error("expected an object, got " + type_name(value));
+}
+
+const Json* ObjectReader::get(std::string_view key) {
+  known_.emplace_back(key);
+  if (!object_->is_object()) return nullptr;
+  const auto it = object_->find(std::string(key));
+  return it == object_->end() ? nullptr : &*it;
+}
+
+void ObjectReader::allow(std::initializer_list<std::string_view> keys) {
+  for (std::string_view k : keys) known_.emplace_back(k);
+}
+
+bool ObjectReader::has(std::string_view key) const {
+  return object_->is_object() && object_->contains(std::string(key));
+}
+
+Result<void> ObjectReader::finish() const {
+  if (!status_.ok()) return status_;
+  for (auto it = object_->begin(); it != object_->end(); ++it) {
+    if (std::find(known_.begin(), known_.end(), it.key()) != known_.end()) continue;
+    std::string message = "unknown key \"" + it.key() + "\"";
+    const std::string guess = nearest(it.key(), known_);
+    if (!guess.empty()) message += " (did you mean \"" + guess + "\"?)";
+    std::vector<std::string> sorted = known_;
+    std::sort(sorted.begin(), sorted.end());
+    sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
+    message += "; known keys:";
+    for (const std::string& k : sorted) message += " " + k;
+    return where_.key(it.key()).error(message);
+  }
+  return {};
+}
+
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    cur[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t subst = prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1);
+      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, subst});
+    }
+    std::swap(prev, cur);
+  }
+  return prev[b.size()];
+}
+
+std::string nearest(std::string_view word, const std::vector<std::string>& candidates) {
+  std::string best;
+  std::size_t best_d = std::numeric_limits<std::size_t>::max();
+  for (const std::string& c : candidates) {
+    const std::size_t d = edit_distance(word, c);
+    if (d < best_d) {
+      best_d = d;
+      best = c;
+    }
+  }
+  // A likely typo: at most a third of the word's letters differ (and at least one may).
+  const std::size_t limit = std::max<std::size_t>(1, word.size() / 3);
+  if (best_d <= limit) return best;
+  // An abbreviation ("tol" for "tolerance").
+  if (word.size() >= 3)
+    for (const std::string& c : candidates)
+      if (c.size() > word.size() && c.compare(0, word.size(), word) == 0) return c;
+  return std::string();
+}
+
+Result<double> read_number(const Json& value, const Where& where) {
+  if (!value.is_number()) return where.error("expected a number, got " + type_name(value));
+  const double v = value.get<double>();
+  if (!std::isfinite(v)) return where.error("expected a finite number");
+  return v;
+}
+
+Result<double> read_positive(const Json& value, const Where& where) {
+  SHATTER_TRY(v, read_number(value, where));
+  if (!(*v > 0.0)) return where.error("expected a number > 0, got " + value.dump());
+  return *v;
+}
+
+Result<double> read_non_negative(const Json& value, const Where& where) {
+  SHATTER_TRY(v, read_number(value, where));
+  if (*v < 0.0) return where.error("expected a number >= 0, got " + value.dump());
+  return *v;
+}
+
+Result<std::int64_t> read_integer(const Json& value, const Where& where) {
+  if (value.is_number_integer()) return value.get<std::int64_t>();
+  if (value.is_number_unsigned()) {
+    const auto u = value.get<std::uint64_t>();
+    if (u > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()))
+      return where.error("integer " + value.dump() + " is too large");
+    return static_cast<std::int64_t>(u);
+  }
+  return where.error("expected an integer, got " + type_name(value));
+}
+
+Result<bool> read_bool(const Json& value, const Where& where) {
+  if (!value.is_boolean()) return where.error("expected true or false, got " + type_name(value));
+  return value.get<bool>();
+}
+
+Result<std::string> read_string(const Json& value, const Where& where) {
+  if (!value.is_string()) return where.error("expected a string, got " + type_name(value));
+  return value.get<std::string>();
+}
+
+Result<Vec3> read_vec3(const Json& value, const Where& where) {
+  if (!value.is_array() || value.size() != 3)
+    return where.error("expected an array of 3 numbers [x, y, z], got " +
+                       (value.is_array() ? "an array of " + std::to_string(value.size()) : type_name(value)));
+  Vec3 v;
+  for (int k = 0; k < 3; ++k) {
+    SHATTER_TRY(c, read_number(value[static_cast<std::size_t>(k)], where.index(static_cast<std::size_t>(k))));
+    v[k] = *c;
+  }
+  return v;
+}
+
+Result<const Json*> read_array(const Json& value, const Where& where) {
+  if (!value.is_array()) return where.error("expected an array, got " + type_name(value));
+  return &value;
+}
+
+}  // namespace shatter::json_input

@@ -1,0 +1,136 @@
+// Cross-check of static linear analysis against CalculiX (an independent FEM code) on the same
+// C3D4 meshes, anchors and nodal loads: a cantilever, a bar in tension, a block under a load patch.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "shatter/fem/fem_model.h"
+#include "shatter/mesh/generate.h"
+#include "shatter/scene/static_case.h"
+#include "shatter/scene/static_results.h"
+#include "shatter/solve/static_solver.h"
+#include "support/test_support.h"
+#include "tools/calculix.h"
+
+namespace shatter {
+namespace {
+
+struct Comparison {
+  double max_u = 0;             // largest |u| of the reference, m
+  double max_u_difference = 0;  // largest |u_shatter - u_ccx|, m
+  double max_stress = 0;        // largest |sigma_ij| of the reference, Pa
+  double max_stress_difference = 0;
+  StaticResults results;
+};
+
+// Solve `case_json` on `mesh` with shatter's linear model and with CalculiX; compare.
+Comparison compare_with_calculix(const TetMesh& mesh, const std::string& case_json, const test::TempDir& dir) {
+  Comparison out;
+  auto c = parse_static_case(case_json, "calculix_case.json");
+  EXPECT_OK(c);
+  if (!c.ok()) return out;
+  EXPECT_EQ(c->model, ModelKind::linear);
+  auto resolved = resolve_static_case(*c, mesh);
+  EXPECT_OK(resolved);
+  if (!resolved.ok()) return out;
+
+  const FemModel model = make_fem_model(mesh, c->material, c->model);
+  std::vector<Vec3> x = mesh.positions;
+  StaticSolverOptions options = make_solver_options(c->solver);
+  options.relative_residual_tolerance = 1e-8;
+  options.linear.kind = LinearSolverKind::direct_ldlt;  // exact linear solves: Newton converges in one step
+  auto report = solve_static(model, make_static_problem(*c, *resolved), x, options);
+  EXPECT_OK(report);
+  if (!report.ok()) return out;
+  EXPECT_TRUE(report->converged) << report->message;
+  out.results = compute_static_results(model, mesh, x);
+
+  calculix::Deck deck{.mesh = &mesh,
+                      .youngs_modulus = c->material.youngs_modulus,
+                      .poisson_ratio = c->material.poisson_ratio,
+                      .held = resolved->held,
+                      .prescribed_displacement = {},
+                      .forces = resolved->forces};
+  deck.prescribed_displacement.resize(mesh.positions.size());
+  for (std::size_t i = 0; i < mesh.positions.size(); ++i)
+    deck.prescribed_displacement[i] = resolved->prescribed[i] - mesh.positions[i];
+  const calculix::Solution ref = calculix::run(deck, dir.path().string());
+  EXPECT_EQ(ref.error, "");
+  if (!ref.error.empty()) return out;
+
+  for (Index i = 0; i < mesh.num_nodes(); ++i) {
+    out.max_u = std::max(out.max_u, ref.displacement[i].norm());
+    out.max_u_difference = std::max(out.max_u_difference, (out.results.displacement[i] - ref.displacement[i]).norm());
+  }
+  for (Index e = 0; e < mesh.num_tets(); ++e) {
+    out.max_stress = std::max(out.max_stress, ref.stress[e].cwiseAbs().maxCoeff());
+    out.max_stress_difference =
+        std::max(out.max_stress_difference, (out.results.stress[e] - ref.stress[e]).cwiseAbs().maxCoeff());
+  }
+  return out;
+}
+
+// The .dat file prints 7 significant digits: agreement to a few parts in 1e7 of the largest value
+// is what the comparison can resolve.
+constexpr double kDisplacementTolerance = 2e-6;
+constexpr double kStressTolerance = 2e-5;
+
+TEST(CalculiX, CantileverUnderTipLoad) {
+  if (!calculix::available()) GTEST_SKIP() << "ccx (CalculiX) is not installed";
+  test::TempDir dir;
+  const TetMesh mesh = make_box_mesh(BoxMeshDef{.min = Vec3::Zero(), .max = Vec3(1.0, 0.1, 0.1), .cells = {12, 2, 2}});
+  const Comparison c = compare_with_calculix(mesh, R"({
+    "material": "steel", "model": "linear",
+    "anchors": [{"plane": {"point": [0, 0, 0], "normal": [1, 0, 0]}}],
+    "loads": [{"box": {"min": [1, 0, 0], "max": [1, 0.1, 0.1]}, "total_force": [0, -1000, 0]}]
+  })", dir);
+  ASSERT_GT(c.max_u, 0.0);
+  EXPECT_LE(c.max_u_difference, kDisplacementTolerance * c.max_u) << c.max_u_difference << " of " << c.max_u;
+  EXPECT_LE(c.max_stress_difference, kStressTolerance * c.max_stress) << c.max_stress_difference << " of " << c.max_stress;
+}
+
+TEST(CalculiX, BarInTensionWithSymmetryRollers) {
+  if (!calculix::available()) GTEST_SKIP() << "ccx (CalculiX) is not installed";
+  test::TempDir dir;
+  const double length = 0.2, side = 0.02, force = 2000.0;
+  const TetMesh mesh = make_box_mesh(BoxMeshDef{.min = Vec3::Zero(), .max = Vec3(length, side, side), .cells = {8, 2, 2}});
+  const Comparison c = compare_with_calculix(mesh, R"({
+    "material": "glass", "model": "linear",
+    "anchors": [
+      {"plane": {"point": [0, 0, 0], "normal": [1, 0, 0]}, "components": "x"},
+      {"plane": {"point": [0, 0, 0], "normal": [0, 1, 0]}, "components": "y"},
+      {"plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}, "components": "z"}],
+    "loads": [{"plane": {"point": [0.2, 0, 0], "normal": [1, 0, 0]}, "total_force": [2000, 0, 0],
+               "distribution": "area"}]
+  })", dir);
+  ASSERT_GT(c.max_u, 0.0);
+  EXPECT_LE(c.max_u_difference, kDisplacementTolerance * c.max_u) << c.max_u_difference << " of " << c.max_u;
+  EXPECT_LE(c.max_stress_difference, kStressTolerance * c.max_stress);
+  // Uniform tension (patch test): sigma_xx = F / A everywhere, end displacement F L / (E A).
+  auto glass = material_preset("glass");
+  ASSERT_OK(glass);
+  const double area = side * side;
+  for (const Mat3& s : c.results.stress) EXPECT_NEAR(s(0, 0), force / area, 1e-6 * force / area);
+  const double expected = force * length / (glass->youngs_modulus * area);
+  for (Index i = 0; i < mesh.num_nodes(); ++i)
+    if (mesh.positions[i].x() == length) { EXPECT_NEAR(c.results.displacement[i].x(), expected, 1e-9 * expected); }
+}
+
+TEST(CalculiX, JitteredBlockUnderLoadPatch) {
+  if (!calculix::available()) GTEST_SKIP() << "ccx (CalculiX) is not installed";
+  test::TempDir dir;
+  const TetMesh mesh = make_box_mesh(BoxMeshDef{.min = Vec3::Zero(), .max = Vec3::Ones(), .cells = {4, 4, 4},
+                                                .pattern = BoxMeshDef::Pattern::five, .jitter = 0.15, .seed = 7});
+  const Comparison c = compare_with_calculix(mesh, R"({
+    "material": "concrete", "model": "linear",
+    "anchors": [{"plane": {"point": [0, 0, 0], "normal": [0, 1, 0]}}],
+    "loads": [{"box": {"min": [0.2, 1, 0.2], "max": [0.8, 1, 0.8]}, "total_force": [2e4, -1e5, 0]},
+              {"nodes": [125], "force": [0, 0, 5e3]}]
+  })", dir);
+  ASSERT_GT(c.max_u, 0.0);
+  EXPECT_LE(c.max_u_difference, kDisplacementTolerance * c.max_u) << c.max_u_difference << " of " << c.max_u;
+  EXPECT_LE(c.max_stress_difference, kStressTolerance * c.max_stress);
+}
+
+}  // namespace
+}  // namespace shatter
