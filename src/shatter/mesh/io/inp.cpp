@@ -312,14 +312,7 @@ class InpReader {
         v.erase(std::unique(v.begin(), v.end()), v.end());
       }
     if (any_quadratic) {
-      std::vector<bool> drop(n, false);
-      std::size_t dropped = 0;
-      for (std::size_t i = 0; i < n; ++i)
-        if (midside[i] && !corner[i]) {
-          drop[i] = true;
-          ++dropped;
-        }
-      io::remove_nodes(m, drop);
+      const std::size_t dropped = io::remove_midside_nodes(m, corner, midside);
       result_.skipped.push_back("C3D10 elements read by their 4 corner nodes (" + std::to_string(dropped) +
                                 " mid-edge nodes dropped)");
     }

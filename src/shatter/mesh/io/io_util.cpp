@@ -88,4 +88,16 @@ bool iequals(std::string_view a, std::string_view b) {
   return true;
 }
 
+std::size_t remove_midside_nodes(TetMesh& mesh, const std::vector<bool>& corner, const std::vector<bool>& midside) {
+  std::vector<bool> drop(corner.size(), false);
+  std::size_t dropped = 0;
+  for (std::size_t i = 0; i < drop.size(); ++i)
+    if (midside[i] && !corner[i]) {
+      drop[i] = true;
+      ++dropped;
+    }
+  remove_nodes(mesh, drop);
+  return dropped;
+}
+
 }  // namespace shatter::io

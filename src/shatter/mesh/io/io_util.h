@@ -48,6 +48,9 @@ void append_int(std::string& out, std::int64_t v);
 /// Remove the nodes flagged in `drop` (#nodes); tets, ids, tags and node sets are renumbered.
 /// Every dropped node must be unused by the tets.
 void remove_nodes(TetMesh& mesh, const std::vector<bool>& drop);
+/// Quadratic tets read by their corners: remove the nodes used only as mid-edge nodes
+/// (midside[i] && !corner[i]). Returns how many were removed.
+std::size_t remove_midside_nodes(TetMesh& mesh, const std::vector<bool>& corner, const std::vector<bool>& midside);
 
 /// Split `line` at `sep`, trimming blanks (spaces, tabs, CR) around each field.
 std::vector<std::string_view> split_fields(std::string_view line, char sep);

@@ -198,14 +198,7 @@ Result<MeshReadResult> parse_tetgen(std::string_view node_bytes, const std::stri
   if (num_tet_attr > 1) result.skipped.push_back(std::to_string(num_tet_attr - 1) + " extra region attribute(s) per tetrahedron");
   if (per_tet == 10) {
     // Keep the corners; drop the nodes only the quadratic tets used as mid-edge nodes.
-    std::vector<bool> drop(n, false);
-    std::size_t dropped = 0;
-    for (std::size_t i = 0; i < n; ++i)
-      if (midside[i] && !corner[i]) {
-        drop[i] = true;
-        ++dropped;
-      }
-    io::remove_nodes(mesh, drop);
+    const std::size_t dropped = io::remove_midside_nodes(mesh, corner, midside);
     result.skipped.push_back(std::to_string(m) + " 10-node tetrahedra read as 4-node (" + std::to_string(dropped) +
                              " mid-edge nodes dropped)");
   }
