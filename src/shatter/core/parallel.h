@@ -16,7 +16,11 @@ namespace shatter {
 void set_num_threads(int n);
 int num_threads();
 
-/// for i in [begin, end): body(i). Iterations must be independent.
+/// for i in [begin, end): body(i). Iterations must be independent. Runs in parallel only when
+/// end - begin >= min_parallel: a parallel region costs microseconds on idle cores but up to a
+/// scheduler time slice when the cores are oversubscribed (every barrier waits for the slowest,
+/// possibly descheduled, thread), so only loops with a few hundred microseconds of work should
+/// choose a threshold that lets them go parallel.
 template <class Body>
 void parallel_for(std::int64_t begin, std::int64_t end, Body&& body, std::int64_t min_parallel = 2048) {
 #ifdef SHATTER_HAS_OPENMP
@@ -33,9 +37,11 @@ void parallel_for(std::int64_t begin, std::int64_t end, Body&& body, std::int64_
 }
 
 /// Deterministic sum of body(i) over [begin, end): partial sums over fixed chunks of `chunk`
-/// indices (independent of the thread count), then added in chunk order.
+/// indices (independent of the thread count), then added in chunk order. Parallel from two chunks
+/// on, or from min_parallel indices when that is more (the bits do not depend on it).
 template <class T, class Body>
-T parallel_sum(std::int64_t begin, std::int64_t end, T zero, Body&& body, std::int64_t chunk = 4096) {
+T parallel_sum(std::int64_t begin, std::int64_t end, T zero, Body&& body, std::int64_t chunk = 4096,
+               std::int64_t min_parallel = 0) {
   const std::int64_t n = end - begin;
   if (n <= 0) return zero;
   const std::int64_t chunks = (n + chunk - 1) / chunk;
@@ -46,7 +52,7 @@ T parallel_sum(std::int64_t begin, std::int64_t end, T zero, Body&& body, std::i
     const std::int64_t hi = std::min(end, lo + chunk);
     for (std::int64_t i = lo; i < hi; ++i) s += body(i);
     partial[static_cast<std::size_t>(c)] = s;
-  }, 2);
+  }, std::max<std::int64_t>(2, (min_parallel + chunk - 1) / chunk));
   T total = zero;
   for (const T& p : partial) total += p;
   return total;

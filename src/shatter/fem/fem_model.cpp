@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cstring>
 
 #include "shatter/core/parallel.h"
 
@@ -74,17 +73,11 @@ void build_blocks(FemModel& model) {
 // Four tets at a time: every double below holds one value per lane (GCC vector extension; with
 // -ffp-contract=off each lane is computed exactly as the scalar formula would be, so the SSE2 and AVX2
 // versions give the same bits).
-// Vectors only live inside stvk_forces_block (load_lanes is always inlined), so none crosses a call;
-// -Wpsabi warns about the call ABI of such vectors.
+// Vectors only live inside stvk_forces_block (loads are built in place, no helper function takes or
+// returns one), so none crosses a call; GCC's -Wpsabi warns about the call ABI of such vectors.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wpsabi"
 typedef double Lanes __attribute__((vector_size(4 * sizeof(double))));
-
-__attribute__((always_inline)) inline Lanes load_lanes(const double* p) {
-  Lanes v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
 
 }  // namespace
 
@@ -110,9 +103,11 @@ void stvk_forces_block(const double* packed, const TetIndices* tets, const std::
   Lanes{(*c[0][k])[a] - (*c[0][0])[a], (*c[1][k])[a] - (*c[1][0])[a], \
         (*c[2][k])[a] - (*c[2][0])[a], (*c[3][k])[a] - (*c[3][0])[a]}
     const double* r = packed + 7 * g0;  // 7 lane vectors per group of 4 tets
-    const Lanes r00 = load_lanes(r), r01 = load_lanes(r + 4), r02 = load_lanes(r + 8),
-                r11 = load_lanes(r + 12), r12 = load_lanes(r + 16), r22 = load_lanes(r + 20),
-                vol = load_lanes(r + 24);
+#define SHATTER_LOAD(p) Lanes{(p)[0], (p)[1], (p)[2], (p)[3]}
+    const Lanes r00 = SHATTER_LOAD(r), r01 = SHATTER_LOAD(r + 4), r02 = SHATTER_LOAD(r + 8),
+                r11 = SHATTER_LOAD(r + 12), r12 = SHATTER_LOAD(r + 16), r22 = SHATTER_LOAD(r + 20),
+                vol = SHATTER_LOAD(r + 24);
+#undef SHATTER_LOAD
     const Lanes d0x = SHATTER_EDGE(1, 0), d0y = SHATTER_EDGE(1, 1), d0z = SHATTER_EDGE(1, 2);
     const Lanes d1x = SHATTER_EDGE(2, 0), d1y = SHATTER_EDGE(2, 1), d1z = SHATTER_EDGE(2, 2);
     const Lanes d2x = SHATTER_EDGE(3, 0), d2y = SHATTER_EDGE(3, 1), d2z = SHATTER_EDGE(3, 2);

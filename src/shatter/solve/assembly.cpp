@@ -169,7 +169,7 @@ void BlockSparseMatrix::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) c
     double s = 0;
     for (int p = outer[r]; p < outer[r + 1]; ++p) s += v[p] * x[inner[p]];
     y[r] = s;
-  }, 4096);
+  }, 16384);  // ~0.05 us per row, once per PCG iteration: parallel only for large systems
 }
 
 void BlockSparseMatrix::add_element(Index slot, const Mat12& k) {

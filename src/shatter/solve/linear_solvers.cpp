@@ -113,7 +113,7 @@ void LinearSolver::apply_preconditioner(const BlockSparseMatrix& a, const Eigen:
   if (options_.kind == LinearSolverKind::pcg_block_jacobi) {
     parallel_for(0, na, [&](std::int64_t i) {
       z.segment<3>(3 * i) = diagonal_inverse_[i] * r.segment<3>(3 * i);
-    }, 2048);
+    }, 16384);  // ~0.01 us per block, once per PCG iteration
     return;
   }
   // Symmetric block Gauss-Seidel, z = M^-1 r with M = (D+L) D^-1 (D+U) (the paper's §3.3):
