@@ -107,8 +107,6 @@ Result<MeshReadResult> parse_tetgen(std::string_view node_bytes, const std::stri
       return nc.error("file ends after " + std::to_string(i) + " of " + std::to_string(n) + " points");
     SHATTER_TRY(id, row_int(nc, row, 0, "point number", std::numeric_limits<std::int64_t>::min(),
                             std::numeric_limits<std::int64_t>::max()));
-    if (i == 0 && *id != 0 && *id != 1)
-      return nc.error_at(row.line, "expected the first point number to be 0 or 1, found " + std::to_string(*id));
     Vec3 p;
     for (int k = 0; k < 3; ++k) {
       SHATTER_TRY(x, row_double(nc, row, 1 + k, "coordinate"));
