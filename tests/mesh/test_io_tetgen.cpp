@@ -98,6 +98,10 @@ TEST(TetgenRead, Malformed) {
   expect_error(parse_tetgen("4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1 8\n", "n", ele, "e"), "unexpected '8'", 5);
   expect_error(parse_tetgen(node4 + "5 1 1 1\n", "n", ele, "e"), "after the 4 points", 6);
   expect_error(parse_tetgen(node4, "n", "1 4 0\n1 1 2 3 5\n", "e"), "uses point 5", 2, "e");
+  // Found by fuzzing: a huge region attribute must be refused before any integer conversion.
+  expect_error(parse_tetgen(node4, "n", "1 4 1\n1 1 2 3 4 1e111\n", "e"), "32-bit integer", 2, "e");
+  expect_error(parse_tetgen(node4, "n", "1 4 1\n1 1 2 3 4 -3e9\n", "e"), "32-bit integer", 2, "e");
+  expect_error(parse_tetgen(node4, "n", "1 4 1\n1 1 2 3 4 2.5\n", "e"), "32-bit integer", 2, "e");
   expect_error(parse_tetgen(node4, "n", "1 4 0\n1 1 2 3 -1\n", "e"), "uses point -1", 2, "e");
   expect_error(parse_tetgen(node4, "n", "3 4 0\n1 1 2 3 4\n", "e"), "larger than the", 1, "e");
   expect_error(parse_tetgen(node4, "n", "2 4 0\n1 1 2 3 4\n# padding\n", "e"), "file ends after 1 of 2", 4, "e");

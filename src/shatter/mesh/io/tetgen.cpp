@@ -1,5 +1,6 @@
 // TetGen .node / .ele: read (0- or 1-based, attributes, boundary markers, '#' comments, 4- or
 // 10-node tets) and write (ids, node markers and tet region tags kept).
+#include <cmath>
 #include <ostream>
 #include <string>
 
@@ -177,8 +178,9 @@ Result<MeshReadResult> parse_tetgen(std::string_view node_bytes, const std::stri
     for (std::int64_t a = 0; a < num_tet_attr; ++a) {
       SHATTER_TRY(x, row_double(ec, row, static_cast<std::size_t>(1 + per_tet + a), "region attribute"));
       if (a == 0) {
-        if (*x != static_cast<double>(static_cast<std::int64_t>(*x)) || *x < std::numeric_limits<std::int32_t>::min() ||
-            *x > std::numeric_limits<std::int32_t>::max())
+        // Range first: converting an out-of-range double to an integer is undefined.
+        if (*x < std::numeric_limits<std::int32_t>::min() || *x > std::numeric_limits<std::int32_t>::max() ||
+            *x != std::trunc(*x))
           return ec.error_at(row.line, "expected the region attribute to be a 32-bit integer, found " +
                                            io::quote_token(row.tokens[1 + per_tet]));
         mesh.tet_tags.push_back(static_cast<std::int32_t>(*x));
