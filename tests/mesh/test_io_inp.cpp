@@ -12,10 +12,7 @@ namespace shatter {
 namespace {
 
 void expect_error(const Result<MeshReadResult>& r, const std::string& substring, std::int64_t line) {
-  ASSERT_FALSE(r.ok()) << "expected an error containing '" << substring << "'";
-  EXPECT_NE(r.error().message.find(substring), std::string::npos) << r.error().to_string();
-  EXPECT_EQ(r.error().line, line) << r.error().to_string();
-  EXPECT_EQ(r.error().file, "t.inp");
+  test::expect_read_error(r, substring, line, "t.inp");
 }
 
 const char* kTwoTets =

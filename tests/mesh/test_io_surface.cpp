@@ -13,12 +13,7 @@ namespace {
 
 void expect_error(const Result<SurfaceReadResult>& r, const std::string& substring, std::int64_t line,
                   std::int64_t offset = -1) {
-  ASSERT_FALSE(r.ok()) << "expected an error containing '" << substring << "'";
-  EXPECT_NE(r.error().message.find(substring), std::string::npos) << r.error().to_string();
-  EXPECT_EQ(r.error().line, line) << r.error().to_string();
-  if (offset >= 0) {
-    EXPECT_EQ(r.error().offset, offset) << r.error().to_string();
-  }
+  test::expect_read_error(r, substring, line, "", offset);
 }
 
 TriSurface box_surface() {

@@ -12,12 +12,7 @@ namespace {
 
 void expect_error(const Result<MeshReadResult>& r, const std::string& substring, std::int64_t line,
                   const std::string& file = "") {
-  ASSERT_FALSE(r.ok()) << "expected an error containing '" << substring << "'";
-  EXPECT_NE(r.error().message.find(substring), std::string::npos) << r.error().to_string();
-  EXPECT_EQ(r.error().line, line) << r.error().to_string();
-  if (!file.empty()) {
-    EXPECT_EQ(r.error().file, file);
-  }
+  test::expect_read_error(r, substring, line, file);
 }
 
 const char* kNode1 =

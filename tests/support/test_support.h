@@ -51,6 +51,22 @@ CommandResult run_command(const std::string& command, bool merge_stderr = false)
 /// Path to the built `shatter` executable.
 std::string cli_path();
 
+/// Check that a reader failed with a message containing `substring` at `line` (-1: no line);
+/// when given, also the byte `offset` and the `file` the error names.
+template <class T>
+void expect_read_error(const Result<T>& r, const std::string& substring, std::int64_t line,
+                       const std::string& file = "", std::int64_t offset = -1) {
+  ASSERT_FALSE(r.ok()) << "expected an error containing '" << substring << "'";
+  EXPECT_NE(r.error().message.find(substring), std::string::npos) << r.error().to_string();
+  EXPECT_EQ(r.error().line, line) << r.error().to_string();
+  if (!file.empty()) {
+    EXPECT_EQ(r.error().file, file);
+  }
+  if (offset >= 0) {
+    EXPECT_EQ(r.error().offset, offset) << r.error().to_string();
+  }
+}
+
 /// Fail the test with the error's text if r is not ok.
 #define ASSERT_OK(expr)                                                        \
   do {                                                                         \
