@@ -7,6 +7,7 @@
 #include <unordered_set>
 
 #include "shatter/mesh/io/io_util.h"
+#include "shatter/mesh/io/mesh_io_util.h"
 #include "shatter/mesh/io/mesh_io.h"
 #include "shatter/mesh/io/text_cursor.h"
 
@@ -392,7 +393,9 @@ Result<void> write_inp(std::ostream& out, const TetMesh& mesh) {
     for (const auto& [name, v] : *sets) {
       SHATTER_TRY(ok, check_set_name(name));
     }
-  std::string s = "*NODE\n";
+  io::WriteBuffer buffer(out);
+  std::string& s = buffer.text();
+  s = "*NODE\n";
   for (Index i = 0; i < mesh.num_nodes(); ++i) {
     io::append_int(s, mesh.node_id(i));
     for (int k = 0; k < 3; ++k) {
@@ -400,10 +403,7 @@ Result<void> write_inp(std::ostream& out, const TetMesh& mesh) {
       io::append_double(s, mesh.positions[i][k]);
     }
     s += '\n';
-    if (s.size() > (1u << 16)) {
-      out << s;
-      s.clear();
-    }
+    buffer.maybe_flush();
   }
   s += "*ELEMENT, TYPE=C3D4\n";
   for (Index e = 0; e < mesh.num_tets(); ++e) {
@@ -413,10 +413,7 @@ Result<void> write_inp(std::ostream& out, const TetMesh& mesh) {
       io::append_int(s, mesh.node_id(mesh.tets[e][k]));
     }
     s += '\n';
-    if (s.size() > (1u << 16)) {
-      out << s;
-      s.clear();
-    }
+    buffer.maybe_flush();
   }
   for (const auto& [name, set] : mesh.node_sets) {
     s += "*NSET, NSET=" + set_name_text(name) + "\n";
@@ -426,7 +423,7 @@ Result<void> write_inp(std::ostream& out, const TetMesh& mesh) {
     s += "*ELSET, ELSET=" + set_name_text(name) + "\n";
     write_id_list(s, set, [&](Index e) { return mesh.tet_id(e); });
   }
-  out << s;
+  buffer.flush();
   return {};
 }
 

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "shatter/mesh/io/io_util.h"
+#include "shatter/mesh/io/mesh_io_util.h"
 #include "shatter/mesh/io/mesh_io.h"
 #include "shatter/mesh/io/text_cursor.h"
 
@@ -144,7 +145,9 @@ Result<MeshReadResult> parse_medit(std::string_view bytes, const std::string& na
 }
 
 Result<void> write_medit(std::ostream& out, const TetMesh& mesh) {
-  std::string s = "MeshVersionFormatted 2\nDimension 3\n\nVertices\n";
+  io::WriteBuffer buffer(out);
+  std::string& s = buffer.text();
+  s = "MeshVersionFormatted 2\nDimension 3\n\nVertices\n";
   s += std::to_string(mesh.num_nodes()) + "\n";
   for (Index i = 0; i < mesh.num_nodes(); ++i) {
     for (int k = 0; k < 3; ++k) {
@@ -153,10 +156,7 @@ Result<void> write_medit(std::ostream& out, const TetMesh& mesh) {
     }
     io::append_int(s, mesh.node_tags.empty() ? 0 : mesh.node_tags[i]);
     s += '\n';
-    if (s.size() > (1u << 16)) {
-      out << s;
-      s.clear();
-    }
+    buffer.maybe_flush();
   }
   s += "\nTetrahedra\n" + std::to_string(mesh.num_tets()) + "\n";
   for (Index e = 0; e < mesh.num_tets(); ++e) {
@@ -166,13 +166,10 @@ Result<void> write_medit(std::ostream& out, const TetMesh& mesh) {
     }
     io::append_int(s, mesh.tet_tags.empty() ? 0 : mesh.tet_tags[e]);
     s += '\n';
-    if (s.size() > (1u << 16)) {
-      out << s;
-      s.clear();
-    }
+    buffer.maybe_flush();
   }
   s += "\nEnd\n";
-  out << s;
+  buffer.flush();
   return {};
 }
 

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "shatter/mesh/io/io_util.h"
+#include "shatter/mesh/io/mesh_io_util.h"
 #include "shatter/mesh/io/mesh_io.h"
 #include "shatter/mesh/io/text_cursor.h"
 
@@ -209,7 +210,8 @@ Result<MeshReadResult> parse_tetgen(std::string_view node_bytes, const std::stri
 
 Result<void> write_tetgen_node(std::ostream& out, const TetMesh& mesh) {
   const bool markers = !mesh.node_tags.empty();
-  std::string s;
+  io::WriteBuffer buffer(out);
+  std::string& s = buffer.text();
   s += std::to_string(mesh.num_nodes()) + " 3 0 " + (markers ? "1" : "0") + "\n";
   for (Index i = 0; i < mesh.num_nodes(); ++i) {
     io::append_int(s, mesh.node_id(i));
@@ -222,18 +224,16 @@ Result<void> write_tetgen_node(std::ostream& out, const TetMesh& mesh) {
       io::append_int(s, mesh.node_tags[i]);
     }
     s += '\n';
-    if (s.size() > (1u << 16)) {
-      out << s;
-      s.clear();
-    }
+    buffer.maybe_flush();
   }
-  out << s;
+  buffer.flush();
   return {};
 }
 
 Result<void> write_tetgen_ele(std::ostream& out, const TetMesh& mesh) {
   const bool tags = !mesh.tet_tags.empty();
-  std::string s;
+  io::WriteBuffer buffer(out);
+  std::string& s = buffer.text();
   s += std::to_string(mesh.num_tets()) + " 4 " + (tags ? "1" : "0") + "\n";
   for (Index e = 0; e < mesh.num_tets(); ++e) {
     io::append_int(s, mesh.tet_id(e));
@@ -246,12 +246,9 @@ Result<void> write_tetgen_ele(std::ostream& out, const TetMesh& mesh) {
       io::append_int(s, mesh.tet_tags[e]);
     }
     s += '\n';
-    if (s.size() > (1u << 16)) {
-      out << s;
-      s.clear();
-    }
+    buffer.maybe_flush();
   }
-  out << s;
+  buffer.flush();
   return {};
 }
 
