@@ -51,7 +51,7 @@ const Case kCases[] = {
 };
 
 TEST(Meshio, WeReadWhatMeshioWrites) {
-  if (!have_meshio()) GTEST_SKIP() << "/usr/bin/python3 cannot import meshio";
+  SHATTER_REQUIRE_TOOL(have_meshio(), "/usr/bin/python3 cannot import meshio");
   test::TempDir dir;
   const TetMesh m = sample_mesh();
   nlohmann::json in;
@@ -75,7 +75,7 @@ TEST(Meshio, WeReadWhatMeshioWrites) {
 }
 
 TEST(Meshio, MeshioReadsWhatWeWrite) {
-  if (!have_meshio()) GTEST_SKIP() << "/usr/bin/python3 cannot import meshio";
+  SHATTER_REQUIRE_TOOL(have_meshio(), "/usr/bin/python3 cannot import meshio");
   test::TempDir dir;
   const TetMesh m = sample_mesh();
   for (const auto& [file, binary] : std::vector<std::pair<std::string, bool>>{

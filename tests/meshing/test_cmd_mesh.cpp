@@ -14,7 +14,7 @@ namespace {
 bool have_cli() { return !test::cli_path().empty() && std::filesystem::exists(test::cli_path()); }
 
 TEST(CmdMesh, PrimitiveReportAndOutput) {
-  if (!have_cli()) GTEST_SKIP() << "shatter executable not built";
+  SHATTER_REQUIRE_TOOL(have_cli(), "shatter executable not built");
   test::TempDir dir;
   const std::string out = dir.file("sphere.vtu");
   const auto r = test::run_command(test::cli_path() + " mesh --primitive sphere --radius 0.1 -H 0.02 --json -o " + out);
@@ -28,7 +28,7 @@ TEST(CmdMesh, PrimitiveReportAndOutput) {
 }
 
 TEST(CmdMesh, ShapeFileAndErrors) {
-  if (!have_cli()) GTEST_SKIP() << "shatter executable not built";
+  SHATTER_REQUIRE_TOOL(have_cli(), "shatter executable not built");
   test::TempDir dir;
   const std::string shape = dir.file("s.json");
   std::ofstream(shape) << R"({"tets": 2000, "shape": {"type": "union", "children": [
@@ -49,7 +49,7 @@ TEST(CmdMesh, ShapeFileAndErrors) {
 }
 
 TEST(CmdMesh, MethodChoice) {
-  if (!have_cli()) GTEST_SKIP() << "shatter executable not built";
+  SHATTER_REQUIRE_TOOL(have_cli(), "shatter executable not built");
   const std::string cli = test::cli_path();
   // A box qualifies for the box-CSG mesher: exact volume.
   auto box = test::run_command(cli + " mesh --primitive box --size 0.3 0.2 0.1 --tets 500 --json");

@@ -76,7 +76,7 @@ constexpr double kDisplacementTolerance = 2e-6;
 constexpr double kStressTolerance = 2e-5;
 
 TEST(CalculiX, CantileverUnderTipLoad) {
-  if (!calculix::available()) GTEST_SKIP() << "ccx (CalculiX) is not installed";
+  SHATTER_REQUIRE_TOOL(calculix::available(), "ccx (CalculiX) is not installed");
   test::TempDir dir;
   const TetMesh mesh = make_box_mesh(BoxMeshDef{.min = Vec3::Zero(), .max = Vec3(1.0, 0.1, 0.1), .cells = {12, 2, 2}});
   const Comparison c = compare_with_calculix(mesh, R"({
@@ -90,7 +90,7 @@ TEST(CalculiX, CantileverUnderTipLoad) {
 }
 
 TEST(CalculiX, BarInTensionWithSymmetryRollers) {
-  if (!calculix::available()) GTEST_SKIP() << "ccx (CalculiX) is not installed";
+  SHATTER_REQUIRE_TOOL(calculix::available(), "ccx (CalculiX) is not installed");
   test::TempDir dir;
   const double length = 0.2, side = 0.02, force = 2000.0;
   const TetMesh mesh = make_box_mesh(BoxMeshDef{.min = Vec3::Zero(), .max = Vec3(length, side, side), .cells = {8, 2, 2}});
@@ -117,7 +117,7 @@ TEST(CalculiX, BarInTensionWithSymmetryRollers) {
 }
 
 TEST(CalculiX, JitteredBlockUnderLoadPatch) {
-  if (!calculix::available()) GTEST_SKIP() << "ccx (CalculiX) is not installed";
+  SHATTER_REQUIRE_TOOL(calculix::available(), "ccx (CalculiX) is not installed");
   test::TempDir dir;
   const TetMesh mesh = make_box_mesh(BoxMeshDef{.min = Vec3::Zero(), .max = Vec3::Ones(), .cells = {4, 4, 4},
                                                 .pattern = BoxMeshDef::Pattern::five, .jitter = 0.15, .seed = 7});
