@@ -21,10 +21,10 @@
 namespace shatter {
 namespace {
 
-// Bounds measured over the test shapes and the assets (docs/meshing.md); the paper's stencils
-// guarantee 10.7..164.8 degrees, our pulling triangulation is checked against these.
-constexpr double kMinDihedralDeg = 10.0;
-constexpr double kMaxDihedralDeg = 165.0;
+// The stencil table's bounds (stuffing.h, checked configuration by configuration in
+// test_stuffing_stencil.cpp); every mesh must respect them.
+constexpr double kMinDihedralDeg = kStuffingMinDihedralDeg;
+constexpr double kMaxDihedralDeg = kStuffingMaxDihedralDeg;
 
 std::uint64_t mesh_hash(const TetMesh& m) {
   Hasher h;

@@ -11,11 +11,14 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <string>
 #include <vector>
 
 #include "shatter/core/parallel.h"
+#include "shatter/mesh/quality.h"
 #include "shatter/mesh/topology.h"
+#include "shatter/meshing/stuffing_stencil.h"
 #include "shatter/mesh/validate.h"
 
 namespace shatter {
@@ -191,135 +194,68 @@ struct Stuffer {
     }, 256);
   }
 
-  // Clip one BCC tet to its non-positive part and cut that into tets (pulling triangulation).
+  // Fill one BCC tet (vertices: black long edge p[0]-p[1], red long edge p[2]-p[3]) from the
+  // stencil table.
   void clip_tet(const std::array<IVec3, 4>& p, std::vector<std::array<Key, 4>>& out) const {
-    std::array<Key, 4> k;
-    std::array<int, 4> s;
-    int nneg = 0, npos = 0;
+    stuffing::StencilInput in;
+    std::array<Key, 10> key{};
     for (int i = 0; i < 4; ++i) {
-      k[i] = lat.id(p[i]);
-      s[i] = sign(k[i]);
-      nneg += s[i] < 0;
-      npos += s[i] > 0;
+      key[static_cast<std::size_t>(i)] = lat.id(p[static_cast<std::size_t>(i)]);
+      in.sign[static_cast<std::size_t>(i)] = sign(key[static_cast<std::size_t>(i)]);
     }
-    if (nneg == 0) {
-      // All-zero tets (every corner warped onto the surface) are kept when their centre is inside.
-      if (npos == 0) {
-        Vec3 c = Vec3::Zero();
-        for (Key q : k) c += key_position(q);
-        if (sdf(0.25 * c) < 0) out.push_back(k);
-      }
+    bool any_in = false, any_out = false;
+    for (int s : in.sign) {
+      any_in |= s < 0;
+      any_out |= s > 0;
+    }
+    if (any_out && !any_in) return;
+    if (!any_out && any_in) {
+      out.push_back({key[0], key[1], key[2], key[3]});
       return;
     }
-    if (npos == 0) {
-      out.push_back(k);
+    for (int i = 0; i < 4; ++i) in.x[static_cast<std::size_t>(i)] = pos[static_cast<std::size_t>(key[static_cast<std::size_t>(i)])];
+    if (!any_in) {  // every vertex on the surface: outside the table
+      if (keep_surface_tet(in.x)) out.push_back({key[0], key[1], key[2], key[3]});
       return;
     }
-    auto cut = [&](int i, int j) { return cut_key(p[i], p[j]); };
-    auto crosses = [&](int i, int j) { return (s[i] < 0 && s[j] > 0) || (s[i] > 0 && s[j] < 0); };
-    // Faces of the clipped polytope: the four clipped tet faces, then the cap on the surface.
-    std::array<std::array<Key, 4>, 5> faces;
-    std::array<int, 5> sizes{};
-    static constexpr int kFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-    for (int f = 0; f < 4; ++f) {
-      for (int m = 0; m < 3; ++m) {
-        const int i = kFaces[f][m], j = kFaces[f][(m + 1) % 3];
-        if (s[i] <= 0) faces[f][sizes[f]++] = k[i];
-        if (crosses(i, j)) faces[f][sizes[f]++] = cut(i, j);
-      }
+    for (int e = 0; e < 6; ++e) {
+      const int i = stuffing::kStencilEdges[e][0], j = stuffing::kStencilEdges[e][1];
+      if (in.sign[static_cast<std::size_t>(i)] * in.sign[static_cast<std::size_t>(j)] >= 0) continue;
+      const Key k = cut_key(p[static_cast<std::size_t>(i)], p[static_cast<std::size_t>(j)]);
+      key[static_cast<std::size_t>(4 + e)] = k;
+      in.x[static_cast<std::size_t>(4 + e)] = key_position(k);
     }
-    int neg[4], posv[4], zero[4], nz = 0;
-    nneg = npos = 0;
-    for (int i = 0; i < 4; ++i) {
-      if (s[i] < 0) neg[nneg++] = i;
-      else if (s[i] > 0) posv[npos++] = i;
-      else zero[nz++] = i;
-    }
-    if (nneg == 2 && npos == 2) {
-      faces[4] = {cut(neg[0], posv[0]), cut(neg[0], posv[1]), cut(neg[1], posv[1]), cut(neg[1], posv[0])};
-      sizes[4] = 4;
-    } else {
-      for (int a = 0; a < nneg; ++a)
-        for (int b = 0; b < npos; ++b) faces[4][sizes[4]++] = cut(neg[a], posv[b]);
-      for (int z = 0; z < nz; ++z) faces[4][sizes[4]++] = k[zero[z]];
-    }
-    // Pull from the polytope vertex that gives the best worst tet: any vertex of a convex polytope
-    // gives a valid decomposition, and the shared faces' splits do not depend on it. The one
-    // non-planar face is the 4-point cap; its vertices are not used as apex. A quadrilateral BCC face
-    // that contains the apex is split as a fan from it, so the apex must be that face's lowest key
-    // (the split its neighbour makes).
-    std::array<Key, 10> verts;
-    int nv = 0;
-    for (int f = 0; f < 5; ++f)
-      for (int i = 0; i < sizes[f]; ++i)
-        if (std::find(verts.begin(), verts.begin() + nv, faces[f][i]) == verts.begin() + nv) verts[nv++] = faces[f][i];
-    std::sort(verts.begin(), verts.begin() + nv);
-    std::vector<std::array<Key, 4>> best, trial;
-    double best_q = -std::numeric_limits<double>::infinity();
-    for (int c = 0; c < nv; ++c) {
-      if (sizes[4] == 4 && std::find(faces[4].begin(), faces[4].end(), verts[c]) != faces[4].end()) continue;
-      bool allowed = true;
-      for (int f = 0; f < 4; ++f)
-        if (sizes[f] == 4 && std::find(faces[f].begin(), faces[f].end(), verts[c]) != faces[f].end() &&
-            *std::min_element(faces[f].begin(), faces[f].end()) != verts[c])
-          allowed = false;
-      if (!allowed) continue;
-      trial.clear();
-      const double q = pull(verts[c], faces, sizes, trial);
-      if (q > best_q) {
-        best_q = q;
-        best.swap(trial);
-      }
-    }
-    out.insert(out.end(), best.begin(), best.end());
-  }
-
-  // Shape measure of a tet: |V| / (sum of squared edge lengths)^(3/2); 0 when flat.
-  static double tet_shape(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-    const double l2 = (b - a).squaredNorm() + (c - a).squaredNorm() + (d - a).squaredNorm() +
-                      (c - b).squaredNorm() + (d - b).squaredNorm() + (d - c).squaredNorm();
-    return std::abs(signed_volume(a, b, c, d)) / (l2 * std::sqrt(l2));
-  }
-
-  // Tets of the pulling triangulation from v; returns the smallest tet shape measure.
-  double pull(Key v, const std::array<std::array<Key, 4>, 5>& faces, const std::array<int, 5>& sizes,
-              std::vector<std::array<Key, 4>>& out) const {
-    const Vec3 xv = key_position(v);
-    double worst = std::numeric_limits<double>::infinity();
-    auto emit = [&](Key a, Key b, Key c) {
-      out.push_back({v, a, b, c});
-      worst = std::min(worst, tet_shape(xv, key_position(a), key_position(b), key_position(c)));
+    // Parity rule: a quadrilateral whose inside vertices are a long edge pivots on the endpoint
+    // with the lower coordinate along the edge when that coordinate / 2 is even.
+    auto lower_pivots = [](const IVec3& a, const IVec3& b) {
+      int axis = 0;
+      (b - a).cwiseAbs().maxCoeff(&axis);
+      return ((std::min(a[axis], b[axis]) >> 1) & 1) == 0;
     };
-    for (int f = 0; f < 5; ++f) {
-      const int n = sizes[f];
-      if (n < 3) continue;
-      const auto& poly = faces[f];
-      if (std::find(poly.begin(), poly.begin() + n, v) != poly.begin() + n) continue;
-      if (n == 3) {
-        emit(poly[0], poly[1], poly[2]);
-        continue;
-      }
-      int m = 0;
-      if (f < 4) {
-        // Shared with the neighbouring BCC tet: split through the lowest key (both sides agree).
-        for (int i = 1; i < 4; ++i)
-          if (poly[i] < poly[m]) m = i;
-      } else {
-        // The cap is on the boundary: take the diagonal that gives the fatter pair of tets.
-        std::array<Vec3, 4> x;
-        for (int i = 0; i < 4; ++i) x[i] = key_position(poly[i]);
-        auto pair_min = [&](int r) {
-          const double v1 = signed_volume(xv, x[r], x[(r + 1) % 4], x[(r + 2) % 4]);
-          const double v2 = signed_volume(xv, x[r], x[(r + 2) % 4], x[(r + 3) % 4]);
-          const double sgn = (v1 + v2) >= 0 ? 1.0 : -1.0;
-          return std::min(sgn * v1, sgn * v2);
-        };
-        m = pair_min(1) > pair_min(0) ? 1 : 0;
-      }
-      emit(poly[m], poly[(m + 1) % 4], poly[(m + 2) % 4]);
-      emit(poly[m], poly[(m + 2) % 4], poly[(m + 3) % 4]);
+    auto first_pivots = [&](const IVec3& a, const IVec3& b) {
+      int axis = 0;
+      (b - a).cwiseAbs().maxCoeff(&axis);
+      return (a[axis] < b[axis]) == lower_pivots(a, b);
+    };
+    in.long_pivot_first = {first_pivots(p[0], p[1]), first_pivots(p[2], p[3])};
+    const stuffing::StencilOutput st = stuffing::fill_stencil(in);
+    for (int t = 0; t < st.count; ++t) {
+      const auto& l = st.tets[static_cast<std::size_t>(t)];
+      out.push_back({key[l[0]], key[l[1]], key[l[2]], key[l[3]]});
     }
-    return worst;
+  }
+
+  // A tet whose four vertices were all warped onto the surface lies on it: kept when its centre
+  // is inside and its dihedral angles are inside the stencil table's bounds.
+  bool keep_surface_tet(const std::array<Vec3, 10>& x) const {
+    Mat34 m;
+    for (int i = 0; i < 4; ++i) m.col(i) = x[static_cast<std::size_t>(i)];
+    if (!(sdf(0.25 * (m.col(0) + m.col(1) + m.col(2) + m.col(3))) < 0)) return false;
+    for (double a : dihedral_angles(m)) {
+      const double deg = a * (180.0 / std::numbers::pi);
+      if (!(deg >= kStuffingMinDihedralDeg && deg <= kStuffingMaxDihedralDeg)) return false;
+    }
+    return true;
   }
 
   // All output tets as keys, black points in lattice order (z slabs in parallel, joined in order).

@@ -20,14 +20,24 @@
 
 namespace shatter {
 
+/// Warp thresholds as fractions of the edge length (Labelle & Shewchuk 2007, section 3).
+inline constexpr double kStuffingAlphaLong = 0.24999;
+inline constexpr double kStuffingAlphaShort = 0.41189;
+/// Dihedral-angle bounds of every tet stuffing outputs with these alphas, degrees: the extremes of
+/// the stencil table over every configuration a warped BCC tet can take, found by exhaustive grid
+/// and local search (tests/meshing/test_stuffing_stencil.cpp; docs/meshing.md). Tets whose four
+/// vertices all lie on the surface are outside the table; they are kept only inside these bounds.
+inline constexpr double kStuffingMinDihedralDeg = 9.3;
+inline constexpr double kStuffingMaxDihedralDeg = 161.7;
+
 struct StuffingDef {
   /// Lattice spacing h (the long BCC edge), m. If 0, chosen to get about `target_tets`.
   double edge_length = 0.0;
   /// Wanted number of tets when edge_length == 0 (h searched, within ~10 %).
   std::int64_t target_tets = 0;
   /// Warp thresholds as fractions of the edge length (Labelle & Shewchuk 2007, section 3).
-  double alpha_long = 0.24999;
-  double alpha_short = 0.41189;
+  double alpha_long = kStuffingAlphaLong;
+  double alpha_short = kStuffingAlphaShort;
   /// False-position iterations for each cut point (distance functions converge in a few).
   int root_iterations = 16;
   /// Refuse lattices larger than this (memory guard).
