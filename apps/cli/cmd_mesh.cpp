@@ -34,6 +34,7 @@ struct MeshArgs {
   double edge_length = 0;
   std::int64_t tets = 0;
   double refine = 1.0;
+  double grading = -1;  // < 0: from the shape file, else 0
   bool binary = false, json = false, no_reference = false;
   int threads = 0;
   std::string method = "auto";
@@ -102,6 +103,7 @@ int run_mesh(const MeshArgs& a) {
     name = f->name;
     def.edge_length = f->edge_length;
     def.target_tets = f->target_tets;
+    def.grading = f->grading;
   } else if (!a.primitive.empty()) {
     auto s = primitive(a);
     if (!s) return report_error(s.error().to_string(), kExitBadInput);
@@ -122,6 +124,9 @@ int run_mesh(const MeshArgs& a) {
   }
   if (!(def.edge_length > 0) && def.target_tets <= 0)
     return report_error("give --edge-length H (m) or --tets N", kExitUsage);
+  if (a.grading >= 0) def.grading = a.grading;
+  if (!std::isfinite(a.grading) || (a.grading < 0 && a.grading != -1))
+    return report_error("--grading: expected a number >= 0", kExitUsage);
   if (!(a.refine > 0) || !std::isfinite(a.refine))
     return report_error("--refine: expected a factor > 0", kExitUsage);
   // About `refine` times as many tets: h / cbrt(refine), or the target count times refine.
@@ -183,7 +188,7 @@ int run_mesh(const MeshArgs& a) {
     reference_kind = "exact";
   }
   if (!reference && !a.no_reference && mesh->num_tets() <= 500'000) {
-    auto fine = stuff_tets(sdf, {.edge_length = 0.5 * report.edge_length});
+    auto fine = stuff_tets(sdf, {.edge_length = 0.5 * report.edge_length});  // uniform: same volume
     if (fine) {
       const double vf = total_volume(*fine);
       reference = vf + (vf - q.volume) / 3.0;
@@ -219,6 +224,10 @@ int run_mesh(const MeshArgs& a) {
     }
     j["lattice_vertices"] = report.lattice_vertices;
     j["warped"] = report.warped;
+    if (method == "stuffing" && def.grading > 0) {
+      j["grading"] = def.grading;
+      j["tets_before_grading"] = report.tets_before_grading;
+    }
     j["seconds"] = seconds;
     std::printf("%s\n", j.dump(2).c_str());
   } else {
@@ -228,6 +237,8 @@ int run_mesh(const MeshArgs& a) {
     out += fmt::format("edge length  {:.6g} m\n", report.edge_length);
     out += fmt::format("nodes        {}\n", mesh->num_nodes());
     out += fmt::format("tets         {}\n", mesh->num_tets());
+    if (method == "stuffing" && def.grading > 0)
+      out += fmt::format("grading      {:g} ({} tets before)\n", def.grading, report.tets_before_grading);
     out += fmt::format("boundary     {} triangles, {} component(s)\n", boundary.triangles.size(), components);
     out += fmt::format("dihedral     {:.2f} .. {:.2f} deg\n", q.min_dihedral_deg, q.max_dihedral_deg);
     out += fmt::format("aspect       {:.3f} .. {:.3f} (mean {:.3f})\n", q.min_aspect, q.max_aspect, q.mean_aspect);
@@ -255,6 +266,8 @@ RunFn setup_mesh(CLI::App& sub) {
   sub.add_option("--minor-radius", a->minor_radius, "Torus tube radius, m");
   sub.add_option("--edge-length,-H", a->edge_length, "Lattice spacing h, m");
   sub.add_option("--tets,-n", a->tets, "Target tet count (h searched)");
+  sub.add_option("--grading", a->grading,
+                 "Stuffing: coarsen the inside, edge length growing by this much per unit depth (0: uniform)");
   sub.add_option("--refine", a->refine, "About this many times more tets than asked (assets at x10, x100)");
   sub.add_option("-o,--output", a->output, "Output mesh (.msh .vtu .vtk .mesh .inp .node)");
   sub.add_flag("--binary", a->binary, "Binary payload where the format has one");

@@ -48,6 +48,24 @@ TEST(CmdMesh, ShapeFileAndErrors) {
   EXPECT_EQ(open.status, 3) << open.output;
 }
 
+// --grading coarsens the inside of a stuffed mesh: fewer tets, the same volume, in the bounds; a
+// negative factor is a usage error.
+TEST(CmdMesh, Grading) {
+  SHATTER_REQUIRE_TOOL(have_cli(), "shatter executable not built");
+  const std::string cli = test::cli_path();
+  auto uniform = test::run_command(cli + " mesh --primitive sphere --radius 0.1 -H 0.01 --json");
+  auto graded = test::run_command(cli + " mesh --primitive sphere --radius 0.1 -H 0.01 --grading 1 --json");
+  ASSERT_EQ(uniform.status, 0) << uniform.output;
+  ASSERT_EQ(graded.status, 0) << graded.output;
+  const auto ju = nlohmann::json::parse(uniform.output), jg = nlohmann::json::parse(graded.output);
+  EXPECT_EQ(jg["tets_before_grading"], ju["tets"]);
+  EXPECT_LT(jg["tets"].get<int>(), ju["tets"].get<int>() * 3 / 4);
+  EXPECT_NEAR(jg["volume"].get<double>(), ju["volume"].get<double>(), 1e-10 * ju["volume"].get<double>());
+  EXPECT_GE(jg["dihedral_deg"]["min"].get<double>(), 9.3);
+  auto bad = test::run_command(cli + " mesh --primitive sphere --radius 0.1 -H 0.01 --grading -2 2>&1");
+  EXPECT_EQ(bad.status, 2) << bad.output;
+}
+
 TEST(CmdMesh, MethodChoice) {
   SHATTER_REQUIRE_TOOL(have_cli(), "shatter executable not built");
   const std::string cli = test::cli_path();

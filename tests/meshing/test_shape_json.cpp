@@ -91,6 +91,8 @@ TEST(ShapeJson, BadFilesNameThePath) {
       {R"({"shap": {}})", "shap", "unknown key"},
       {R"({"name": "x"})", "shape", "missing"},
       {R"({"shape": {"type": "sphere", "radius": 1}, "tets": -5})", "tets", "integer > 0"},
+      {R"({"shape": {"type": "sphere", "radius": 1}, "grading": -0.5})", "grading", "number >= 0"},
+      {R"({"shape": {"type": "sphere", "radius": 1}, "grading": "a"})", "grading", "number >= 0"},
       {R"([1, 2])", "", "JSON object"},
   };
   for (const BadCase& c : cases) {

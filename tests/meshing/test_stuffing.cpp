@@ -15,6 +15,7 @@
 #include "shatter/mesh/quality.h"
 #include "shatter/mesh/topology.h"
 #include "shatter/mesh/validate.h"
+#include "shatter/meshing/coarsen.h"
 #include "shatter/meshing/stuffing.h"
 #include "support/test_support.h"
 
@@ -205,6 +206,79 @@ TEST(Stuffing, BadParameters) {
   EXPECT_NE(r4.error().message.find("thinner"), std::string::npos) << r4.error().message;
   auto r5 = stuff_tets(Sdf(), {.edge_length = 0.1});
   ASSERT_FALSE(r5.ok());
+}
+
+}  // namespace
+}  // namespace shatter
+
+namespace shatter {
+namespace {
+
+std::vector<std::array<double, 9>> boundary_triangles_by_position(const TetMesh& m) {
+  const TriSurface s = boundary_surface(m);
+  std::vector<std::array<double, 9>> out;
+  for (const TriIndices& t : s.triangles) {
+    // Rotate so the smallest corner (lexicographic) comes first: same triangle, same key.
+    std::array<Vec3, 3> p = {s.positions[t[0]], s.positions[t[1]], s.positions[t[2]]};
+    auto less = [](const Vec3& a, const Vec3& b) { return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3); };
+    int first = 0;
+    for (int k = 1; k < 3; ++k)
+      if (less(p[k], p[first])) first = k;
+    std::array<double, 9> key;
+    for (int k = 0; k < 3; ++k)
+      for (int c = 0; c < 3; ++c) key[3 * k + c] = p[(first + k) % 3][c];
+    out.push_back(key);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// Grading coarsens the inside only: the boundary surface is the same triangles at the same
+// positions, the volume is the same, angles stay in bounds and the inside edges grow.
+TEST(StuffingGrading, CoarsensTheInsideKeepingBoundaryVolumeAndBounds) {
+  const Sdf shape = Sdf::smooth_unite({Sdf::sphere(0.1), Sdf::box(Vec3(0.06, 0.16, 0.06)).rotated(rotation_from_euler_deg(Vec3(10, 20, 30)))}, 0.02);
+  const double h = 0.008;
+  StuffingReport ru, rg;
+  auto uniform = stuff_tets(shape, {.edge_length = h}, &ru);
+  auto graded = stuff_tets(shape, {.edge_length = h, .grading = 1.0}, &rg);
+  ASSERT_OK(uniform);
+  ASSERT_OK(graded);
+  EXPECT_EQ(rg.tets_before_grading, uniform->num_tets());
+  EXPECT_LT(graded->num_tets(), uniform->num_tets() / 2);
+  std::printf("uniform %d tets, graded %d tets\n", uniform->num_tets(), graded->num_tets());
+  EXPECT_EQ(boundary_triangles_by_position(*uniform), boundary_triangles_by_position(*graded));
+  EXPECT_NEAR(total_volume(*graded), total_volume(*uniform), 1e-10 * total_volume(*uniform));  // sums in another order
+  check_mesh(*graded, 2);
+  // Mean edge length of tets whose centre is deeper than 4 h: well above h.
+  double sum = 0;
+  int n = 0;
+  for (Index e = 0; e < graded->num_tets(); ++e) {
+    const Mat34 x = graded->corners(e);
+    if (!(shape(x.rowwise().mean()) < -4 * h)) continue;
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j, ++n) sum += (x.col(i) - x.col(j)).norm();
+  }
+  ASSERT_GT(n, 0);
+  EXPECT_GT(sum / n, 1.5 * h);
+}
+
+TEST(StuffingGrading, DeterministicAcrossThreadsAndRejectsBadParameters) {
+  const Sdf s = Sdf::ellipsoid(Vec3(0.1, 0.06, 0.08));
+  const int saved = num_threads();
+  set_num_threads(1);
+  auto a = stuff_tets(s, {.edge_length = 0.01, .grading = 0.5});
+  set_num_threads(2);
+  auto b = stuff_tets(s, {.edge_length = 0.01, .grading = 0.5});
+  set_num_threads(saved);
+  ASSERT_OK(a);
+  ASSERT_OK(b);
+  EXPECT_EQ(mesh_hash(*a), mesh_hash(*b));
+  EXPECT_FALSE(stuff_tets(s, {.edge_length = 0.01, .grading = -1}));
+  EXPECT_FALSE(stuff_tets(s, {.edge_length = 0.01, .grading = std::nan("")}));
+  EXPECT_FALSE(stuff_tets(s, {.edge_length = 0.01, .grading = 1, .max_size_ratio = 0.5}));
+  TetMesh m = *a;
+  EXPECT_FALSE(coarsen_interior(m, {}));
+  EXPECT_FALSE(coarsen_interior(m, {.size = [](const Vec3&) { return 1.0; }, .collapse_ratio = 1.5}));
 }
 
 }  // namespace

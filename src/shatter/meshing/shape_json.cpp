@@ -196,8 +196,9 @@ Result<ShapeFile> parse_shape_json(std::string_view text, const std::string& fil
   Parser p{file_name, options};
   if (!j.is_object()) return p.error("", "expected a JSON object with a \"shape\"");
   for (const auto& [key, value] : j.items())
-    if (key != "name" && key != "shape" && key != "edge_length" && key != "tets" && key != "comment")
-      return p.error(key, "unknown key; expected name, shape, edge_length, tets, comment");
+    if (key != "name" && key != "shape" && key != "edge_length" && key != "tets" && key != "grading" &&
+        key != "comment")
+      return p.error(key, "unknown key; expected name, shape, edge_length, tets, grading, comment");
   ShapeFile out;
   if (j.contains("name")) {
     if (!j.at("name").is_string()) return p.error("name", "expected a string");
@@ -211,6 +212,12 @@ Result<ShapeFile> parse_shape_json(std::string_view text, const std::string& fil
     const Json& t = j.at("tets");
     if (!t.is_number_integer() || t.get<std::int64_t>() <= 0) return p.error("tets", "expected an integer > 0");
     out.target_tets = t.get<std::int64_t>();
+  }
+  if (j.contains("grading")) {
+    const Json& g = j.at("grading");
+    if (!g.is_number() || !(g.get<double>() >= 0) || !std::isfinite(g.get<double>()))
+      return p.error("grading", "expected a number >= 0");
+    out.grading = g.get<double>();
   }
   if (!j.contains("shape")) return p.error("shape", "missing; expected a shape object");
   SHATTER_TRY(s, p.node(j.at("shape"), "shape"));

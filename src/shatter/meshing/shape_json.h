@@ -19,6 +19,7 @@ struct ShapeFile {
   Sdf sdf;                       ///< the "shape" tree
   double edge_length = 0;        ///< "edge_length" (m) if given, else 0
   std::int64_t target_tets = 0;  ///< "tets" if given, else 0
+  double grading = 0;            ///< "grading" (stuffing.h) if given, else 0
 };
 
 /// Loads a closed surface file for {"type": "surface", "file": ...}; the path is already resolved

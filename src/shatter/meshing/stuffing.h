@@ -4,7 +4,9 @@
 // lattice edge, lattice vertices within alpha * edge length of a cut point warped onto it, and each
 // BCC tet clipped to its non-positive part and cut into tets.
 //
-// Limits: uniform lattice (no grading); sharp edges and corners of the shape are rounded at the
+// Grading (optional) coarsens the inside by edge collapse afterwards (coarsen.h).
+//
+// Limits: sharp edges and corners of the shape are rounded at the
 // scale of h (the boundary interpolates points of the zero set, it does not follow creases); the
 // clipped polytopes are split by a pulling triangulation (quadrilateral faces split through their
 // lowest-numbered vertex, so neighbours always agree; apex chosen for the best worst tet), not by
@@ -38,6 +40,15 @@ struct StuffingDef {
   /// Warp thresholds as fractions of the edge length (Labelle & Shewchuk 2007, section 3).
   double alpha_long = kStuffingAlphaLong;
   double alpha_short = kStuffingAlphaShort;
+  /// Grading: 0 keeps every tet at the lattice size. g > 0 coarsens the inside after stuffing
+  /// (coarsen.h): the wanted edge length grows from h at depth h below the surface by g per unit
+  /// depth, up to max_size_ratio * h. The boundary and the dihedral-angle bounds are kept.
+  double grading = 0.0;
+  double max_size_ratio = 8.0;
+  /// Dihedral-angle range every tet changed by grading must keep, degrees (clamped to the stencil
+  /// bounds): tighter than the bounds so grading does not lower the mesh's quality much.
+  double graded_min_dihedral_deg = 18.0;
+  double graded_max_dihedral_deg = 145.0;
   /// False-position iterations for each cut point (distance functions converge in a few).
   int root_iterations = 16;
   /// Refuse lattices larger than this (memory guard).
@@ -50,6 +61,7 @@ struct StuffingReport {
   std::int64_t cut_points = 0;        ///< cut points kept after warping
   std::int64_t warped = 0;            ///< lattice vertices warped onto the surface
   int attempts = 1;                   ///< meshings tried to reach target_tets
+  std::int64_t tets_before_grading = 0;  ///< tets of the uniform mesh (= tets without grading)
 };
 
 /// Mesh the inside (sdf < 0) of the shape. Nodes: used lattice vertices in lattice order, then cut

@@ -1,0 +1,250 @@
+// Interior coarsening by edge collapse; see coarsen.h.
+#include "shatter/meshing/coarsen.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <tuple>
+#include <vector>
+
+
+namespace shatter {
+namespace {
+
+using Face = std::array<Index, 3>;
+using Edge = std::array<Index, 2>;
+
+Face sorted_face(Index a, Index b, Index c) {
+  Face f{a, b, c};
+  std::sort(f.begin(), f.end());
+  return f;
+}
+
+struct Collapser {
+  TetMesh& mesh;
+  const CoarsenDef& def;
+  std::vector<std::vector<Index>> star;  // node -> live tets containing it
+  std::vector<char> tet_alive, boundary, locked;
+
+  void build() {
+    const Index n = mesh.num_nodes();
+    star.assign(static_cast<std::size_t>(n), {});
+    for (Index e = 0; e < mesh.num_tets(); ++e)
+      for (Index v : mesh.tets[static_cast<std::size_t>(e)]) star[static_cast<std::size_t>(v)].push_back(e);
+    tet_alive.assign(mesh.tets.size(), 1);
+    // Boundary nodes: on a face that only one tet has.
+    std::vector<Face> faces;
+    faces.reserve(mesh.tets.size() * 4);
+    for (const TetIndices& t : mesh.tets) {
+      faces.push_back(sorted_face(t[1], t[2], t[3]));
+      faces.push_back(sorted_face(t[0], t[2], t[3]));
+      faces.push_back(sorted_face(t[0], t[1], t[3]));
+      faces.push_back(sorted_face(t[0], t[1], t[2]));
+    }
+    std::sort(faces.begin(), faces.end());
+    boundary.assign(static_cast<std::size_t>(n), 0);
+    for (std::size_t i = 0; i < faces.size();) {
+      std::size_t j = i;
+      while (j < faces.size() && faces[j] == faces[i]) ++j;
+      if (j - i == 1)
+        for (Index v : faces[i]) boundary[static_cast<std::size_t>(v)] = 1;
+      i = j;
+    }
+  }
+
+  [[nodiscard]] static bool contains(const TetIndices& t, Index v) { return std::find(t.begin(), t.end(), v) != t.end(); }
+
+  // Lk(a) and Lk(b) may only share what Lk(ab) has (Dey et al. 1999): otherwise the collapse
+  // would glue distinct simplices together.
+  // Scratch for link_condition (reused: the collapser runs on one thread).
+  mutable std::vector<Index> va, vb, vab, common;
+  mutable std::vector<Edge> ea, eb, eab, common_edges;
+  mutable std::vector<Face> fa, fb, common_faces;
+
+  [[nodiscard]] bool link_condition(Index a, Index b) const {
+    for (auto* v : {&va, &vb, &vab, &common}) v->clear();
+    for (auto* v : {&ea, &eb, &eab, &common_edges}) v->clear();
+    for (auto* v : {&fa, &fb, &common_faces}) v->clear();
+    auto add_link = [&](Index x, Index other, std::vector<Index>& verts, std::vector<Edge>& edges, std::vector<Face>& tris) {
+      for (Index e : star[static_cast<std::size_t>(x)]) {
+        const TetIndices& t = mesh.tets[static_cast<std::size_t>(e)];
+        std::array<Index, 3> o{};
+        int k = 0;
+        for (Index v : t)
+          if (v != x) o[static_cast<std::size_t>(k++)] = v;
+        for (Index v : o)
+          if (v != other) verts.push_back(v);
+        if (contains(t, other)) continue;  // simplices with the other end are not in both links
+        tris.push_back(sorted_face(o[0], o[1], o[2]));
+        for (int i = 0; i < 3; ++i)
+          for (int j = i + 1; j < 3; ++j)
+            edges.push_back({std::min(o[static_cast<std::size_t>(i)], o[static_cast<std::size_t>(j)]),
+                             std::max(o[static_cast<std::size_t>(i)], o[static_cast<std::size_t>(j)])});
+      }
+    };
+    add_link(a, b, va, ea, fa);
+    add_link(b, a, vb, eb, fb);
+    for (Index e : star[static_cast<std::size_t>(a)]) {
+      const TetIndices& t = mesh.tets[static_cast<std::size_t>(e)];
+      if (!contains(t, b)) continue;
+      std::array<Index, 2> o{};
+      int k = 0;
+      for (Index v : t)
+        if (v != a && v != b) o[static_cast<std::size_t>(k++)] = v;
+      vab.push_back(o[0]);
+      vab.push_back(o[1]);
+      eab.push_back({std::min(o[0], o[1]), std::max(o[0], o[1])});
+    }
+    auto uniq = [](auto& v) {
+      std::sort(v.begin(), v.end());
+      v.erase(std::unique(v.begin(), v.end()), v.end());
+    };
+    uniq(va), uniq(vb), uniq(vab), uniq(ea), uniq(eb), uniq(eab), uniq(fa), uniq(fb);
+    std::set_intersection(va.begin(), va.end(), vb.begin(), vb.end(), std::back_inserter(common));
+    if (common != vab) return false;
+    std::set_intersection(ea.begin(), ea.end(), eb.begin(), eb.end(), std::back_inserter(common_edges));
+    for (const Edge& e : common_edges)
+      if (!std::binary_search(eab.begin(), eab.end(), e)) return false;
+    std::set_intersection(fa.begin(), fa.end(), fb.begin(), fb.end(), std::back_inserter(common_faces));
+    return common_faces.empty();
+  }
+
+  // Every tet of star(a) without b, with a moved onto b: positive and inside the angle bounds.
+  // Dihedral angles compared by cosine: the angle at the edge shared by the faces opposite
+  // vertices l and m has cos = -n_l . n_m / (|n_l| |n_m|), n the outward face normals.
+  [[nodiscard]] bool shapes_ok(Index a, Index b) const {
+    const double cos_min = std::cos(def.min_dihedral_deg * std::numbers::pi / 180.0);
+    const double cos_max = std::cos(def.max_dihedral_deg * std::numbers::pi / 180.0);
+    for (Index e : star[static_cast<std::size_t>(a)]) {
+      const TetIndices& t = mesh.tets[static_cast<std::size_t>(e)];
+      if (contains(t, b)) continue;
+      std::array<Vec3, 4> x;
+      for (int k = 0; k < 4; ++k) {
+        const Index v = t[static_cast<std::size_t>(k)] == a ? b : t[static_cast<std::size_t>(k)];
+        x[static_cast<std::size_t>(k)] = mesh.positions[static_cast<std::size_t>(v)];
+      }
+      if (!(signed_volume(x[0], x[1], x[2], x[3]) > 0)) return false;
+      // Outward normals of a positive tet: face opposite 0 is (1, 2, 3), and so on.
+      const std::array<Vec3, 4> n = {(x[2] - x[1]).cross(x[3] - x[1]), (x[3] - x[0]).cross(x[2] - x[0]),
+                                     (x[1] - x[0]).cross(x[3] - x[0]), (x[2] - x[0]).cross(x[1] - x[0])};
+      std::array<double, 4> len;
+      for (int k = 0; k < 4; ++k) len[static_cast<std::size_t>(k)] = n[static_cast<std::size_t>(k)].norm();
+      for (int l = 0; l < 4; ++l)
+        for (int m = l + 1; m < 4; ++m) {
+          const double c = -n[static_cast<std::size_t>(l)].dot(n[static_cast<std::size_t>(m)]) /
+                           (len[static_cast<std::size_t>(l)] * len[static_cast<std::size_t>(m)]);
+          if (!(c <= cos_min && c >= cos_max)) return false;
+        }
+    }
+    return true;
+  }
+
+  void collapse(Index a, Index b) {
+    std::vector<Index>& sb = star[static_cast<std::size_t>(b)];
+    for (Index e : star[static_cast<std::size_t>(a)]) {
+      TetIndices& t = mesh.tets[static_cast<std::size_t>(e)];
+      for (Index v : t) locked[static_cast<std::size_t>(v)] = 1;
+      if (contains(t, b)) {  // the tets around edge ab vanish
+        tet_alive[static_cast<std::size_t>(e)] = 0;
+        for (Index v : t) {
+          if (v == a) continue;
+          auto& s = star[static_cast<std::size_t>(v)];
+          s.erase(std::find(s.begin(), s.end(), e));
+        }
+      } else {
+        std::replace(t.begin(), t.end(), a, b);
+        sb.insert(std::lower_bound(sb.begin(), sb.end(), e), e);
+      }
+    }
+    star[static_cast<std::size_t>(a)].clear();
+  }
+
+  [[nodiscard]] bool try_collapse(Index a, Index b) {
+    if (boundary[static_cast<std::size_t>(a)]) return false;
+    if (!shapes_ok(a, b) || !link_condition(a, b)) return false;  // the cheaper test first
+    collapse(a, b);
+    return true;
+  }
+
+  // One pass: candidate edges with an end in `active` (every node on the first pass; afterwards the
+  // nodes whose stars changed, since a refused collapse only changes its verdict when a star it
+  // looks at changes), short for the size at their midpoint, tried shortest first (ties by node
+  // ids). A collapse locks its star for the rest of the pass. Returns the nodes whose stars changed.
+  std::vector<char> pass(const std::vector<char>& active, int& done) {
+    std::vector<std::tuple<double, Index, Index>> shortlist;
+    std::vector<Index> nbr;
+    for (std::size_t v = 0; v < star.size(); ++v) {
+      if (!active[v]) continue;
+      nbr.clear();
+      for (Index e : star[v])
+        for (Index w : mesh.tets[static_cast<std::size_t>(e)]) {
+          if (w == static_cast<Index>(v)) continue;
+          if (active[static_cast<std::size_t>(w)] && w < static_cast<Index>(v)) continue;  // seen from w
+          if (boundary[v] && boundary[static_cast<std::size_t>(w)]) continue;
+          nbr.push_back(w);
+        }
+      std::sort(nbr.begin(), nbr.end());
+      nbr.erase(std::unique(nbr.begin(), nbr.end()), nbr.end());
+      for (Index w : nbr) {
+        const Vec3& pa = mesh.positions[v];
+        const Vec3& pb = mesh.positions[static_cast<std::size_t>(w)];
+        const double len = (pa - pb).norm();
+        if (len < def.collapse_ratio * def.size(0.5 * (pa + pb)))
+          shortlist.emplace_back(len, std::min(static_cast<Index>(v), w), std::max(static_cast<Index>(v), w));
+      }
+    }
+    std::sort(shortlist.begin(), shortlist.end());
+    locked.assign(mesh.positions.size(), 0);
+    done = 0;
+    for (const auto& [len, a, b] : shortlist) {
+      if (locked[static_cast<std::size_t>(a)] || locked[static_cast<std::size_t>(b)]) continue;
+      if (try_collapse(a, b) || try_collapse(b, a)) ++done;
+    }
+    return locked;
+  }
+};
+
+}  // namespace
+
+Result<CoarsenReport> coarsen_interior(TetMesh& mesh, const CoarsenDef& def) {
+  if (!def.size) return field_error("size", "no sizing function given");
+  if (!(def.collapse_ratio > 0 && def.collapse_ratio < 1))
+    return field_error("collapse_ratio", "expected a number in (0, 1)");
+  CoarsenReport report;
+  report.tets_before = mesh.num_tets();
+  Collapser c{mesh, def};
+  c.build();
+  std::vector<char> active(mesh.positions.size(), 1);
+  for (int p = 0; p < def.max_passes; ++p) {
+    int done = 0;
+    active = c.pass(active, done);
+    report.collapses += done;
+    report.passes = p + 1;
+    if (done == 0) break;
+  }
+  // Compact: surviving tets in order, used nodes in order.
+  std::vector<TetIndices> tets;
+  tets.reserve(mesh.tets.size());
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
+    if (c.tet_alive[e]) tets.push_back(mesh.tets[e]);
+  std::vector<Index> node_of(mesh.positions.size(), -1);
+  for (const TetIndices& t : tets)
+    for (Index v : t) node_of[static_cast<std::size_t>(v)] = 0;
+  std::vector<Vec3> positions;
+  for (std::size_t v = 0; v < node_of.size(); ++v)
+    if (node_of[v] == 0) {
+      node_of[v] = static_cast<Index>(positions.size());
+      positions.push_back(mesh.positions[v]);
+    }
+  for (TetIndices& t : tets)
+    for (Index& v : t) v = node_of[static_cast<std::size_t>(v)];
+  TetMesh out;
+  out.positions = std::move(positions);
+  out.tets = std::move(tets);
+  mesh = std::move(out);
+  report.tets_after = mesh.num_tets();
+  return report;
+}
+
+}  // namespace shatter
