@@ -2,16 +2,14 @@
 // (Labelle & Shewchuk 2007, "Isosurface Stuffing: Fast Tetrahedral Meshes with Good Dihedral
 // Angles", SIGGRAPH): BCC lattice of spacing h, cut points where the SDF changes sign along a
 // lattice edge, lattice vertices within alpha * edge length of a cut point warped onto it, and each
-// BCC tet clipped to its non-positive part and cut into tets.
+// BCC tet filled from the stencil table (stuffing_stencil.h) by the signs of its vertices.
 //
 // Grading (optional) coarsens the inside by edge collapse afterwards (coarsen.h).
 //
-// Limits: sharp edges and corners of the shape are rounded at the
-// scale of h (the boundary interpolates points of the zero set, it does not follow creases); the
-// clipped polytopes are split by a pulling triangulation (quadrilateral faces split through their
-// lowest-numbered vertex, so neighbours always agree; apex chosen for the best worst tet), not by
-// the paper's stencil table with its parity rule, so the paper's 10.7-164.8 degree bounds are not
-// guaranteed; docs/meshing.md gives the bounds measured on the test shapes and assets.
+// Limits: sharp edges and corners of the shape are rounded at the scale of h (the boundary
+// interpolates points of the zero set, it does not follow creases); the dihedral-angle bounds below
+// come from a numerical search of every configuration of the table, not a proof, and are lower than
+// the paper's 10.7 degrees (docs/meshing.md).
 #pragma once
 
 #include <cstdint>
