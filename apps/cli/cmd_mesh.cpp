@@ -35,7 +35,7 @@ struct MeshArgs {
   std::int64_t tets = 0;
   double refine = 1.0;
   double grading = -1;  // < 0: from the shape file, else 0
-  bool binary = false, json = false, no_reference = false;
+  bool binary = false, json = false, no_reference = false, no_sharpen = false;
   int threads = 0;
   std::string method = "auto";
   int segments = 0;
@@ -104,6 +104,7 @@ int run_mesh(const MeshArgs& a) {
     def.edge_length = f->edge_length;
     def.target_tets = f->target_tets;
     def.grading = f->grading;
+    def.sharpen = f->sharpen;
   } else if (!a.primitive.empty()) {
     auto s = primitive(a);
     if (!s) return report_error(s.error().to_string(), kExitBadInput);
@@ -125,6 +126,7 @@ int run_mesh(const MeshArgs& a) {
   if (!(def.edge_length > 0) && def.target_tets <= 0)
     return report_error("give --edge-length H (m) or --tets N", kExitUsage);
   if (a.grading >= 0) def.grading = a.grading;
+  if (a.no_sharpen) def.sharpen = false;
   if (!std::isfinite(a.grading) || (a.grading < 0 && a.grading != -1))
     return report_error("--grading: expected a number >= 0", kExitUsage);
   if (!(a.refine > 0) || !std::isfinite(a.refine))
@@ -224,6 +226,7 @@ int run_mesh(const MeshArgs& a) {
     }
     j["lattice_vertices"] = report.lattice_vertices;
     j["warped"] = report.warped;
+    if (method == "stuffing") j["sharpened"] = report.sharpened;
     if (method == "stuffing" && def.grading > 0) {
       j["grading"] = def.grading;
       j["tets_before_grading"] = report.tets_before_grading;
@@ -268,6 +271,7 @@ RunFn setup_mesh(CLI::App& sub) {
   sub.add_option("--tets,-n", a->tets, "Target tet count (h searched)");
   sub.add_option("--grading", a->grading,
                  "Stuffing: coarsen the inside, edge length growing by this much per unit depth (0: uniform)");
+  sub.add_flag("--no-sharpen", a->no_sharpen, "Stuffing: leave creases and corners rounded (no feature snapping)");
   sub.add_option("--refine", a->refine, "About this many times more tets than asked (assets at x10, x100)");
   sub.add_option("-o,--output", a->output, "Output mesh (.msh .vtu .vtk .mesh .inp .node)");
   sub.add_flag("--binary", a->binary, "Binary payload where the format has one");

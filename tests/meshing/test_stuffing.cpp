@@ -283,3 +283,58 @@ TEST(StuffingGrading, DeterministicAcrossThreadsAndRejectsBadParameters) {
 
 }  // namespace
 }  // namespace shatter
+
+namespace shatter {
+namespace {
+
+// Distance of the mesh's boundary from the shape: |sdf| at the centres and edge midpoints of the
+// boundary triangles (mean and max), in units of h.
+std::pair<double, double> boundary_deviation(const TetMesh& m, const Sdf& s, double h) {
+  const TriSurface b = boundary_surface(m);
+  double sum = 0, worst = 0;
+  int n = 0;
+  for (const TriIndices& t : b.triangles) {
+    const Vec3 p0 = b.positions[t[0]], p1 = b.positions[t[1]], p2 = b.positions[t[2]];
+    for (const Vec3& q : {Vec3((p0 + p1 + p2) / 3.0), Vec3(0.5 * (p0 + p1)), Vec3(0.5 * (p1 + p2)), Vec3(0.5 * (p2 + p0))}) {
+      const double d = std::abs(s(q)) / h;
+      sum += d;
+      worst = std::max(worst, d);
+      ++n;
+    }
+  }
+  return {sum / n, worst};
+}
+
+// Sharpening moves boundary nodes onto creases and corners: the boundary gets closer to the shape
+// on average (the largest deviation, at corners no node can reach within the angle bounds, stays),
+// angles stay in the bounds, the boundary stays a closed manifold of the same topology.
+TEST(StuffingSharpen, CreasesComeBackInsideTheBounds) {
+  // A tilted box (sphere-like boundary, Euler characteristic 2) and a tilted cylinder with a square
+  // hole through it (a torus, 0).
+  const std::pair<Sdf, int> shapes[] = {
+      {Sdf::box(Vec3(0.1, 0.05, 0.075)).rotated(rotation_from_euler_deg(Vec3(20, 30, 10))), 2},
+      {Sdf::subtract({Sdf::cylinder(0.05, 0.1).rotated(rotation_from_euler_deg(Vec3(10, 0, 20))), Sdf::box(Vec3(0.02, 0.15, 0.02))}), 0},
+  };
+  const double h = 0.01;
+  for (const auto& [s, euler] : shapes) {
+    StuffingReport r;
+    auto sharp = stuff_tets(s, {.edge_length = h}, &r);
+    auto round = stuff_tets(s, {.edge_length = h, .sharpen = false});
+    ASSERT_OK(sharp);
+    ASSERT_OK(round);
+    EXPECT_GT(r.sharpened, 0);
+    const auto [mean_s, max_s] = boundary_deviation(*sharp, s, h);
+    const auto [mean_r, max_r] = boundary_deviation(*round, s, h);
+    std::printf("boundary deviation / h: sharpened mean %.4f max %.4f, rounded mean %.4f max %.4f (%lld moves)\n", mean_s, max_s,
+                mean_r, max_r, static_cast<long long>(r.sharpened));
+    EXPECT_LT(mean_s, mean_r);
+    {
+      SCOPED_TRACE("rounded");
+      check_mesh(*round, euler);
+    }
+    check_mesh(*sharp, euler);
+  }
+}
+
+}  // namespace
+}  // namespace shatter

@@ -90,8 +90,7 @@ struct Angles {
   int tets = 0;
 };
 
-// Dihedral extremes of the tets the table outputs for c (all-zero tets excluded: the lattice code
-// filters them by the same bounds). A tet whose orientation differs from the one it has with every
+// Dihedral extremes of the tets the table outputs for c. A tet whose orientation differs from the one it has with every
 // vertex unwarped and every cut point at mid-edge is inverted.
 Angles evaluate(const Config& c) {
   Angles a;
@@ -150,7 +149,7 @@ void for_each_config(const Alphas& al, int nf, int nt, bool pivot_on_short, Visi
               }
             }
           }
-          if (warped == 4 || !admissible(c)) continue;
+          if (warped == 4 || !admissible(c)) continue;  // all on the surface: no output
           bool any_in = false;
           for (int k : c.kind) any_in |= k < 0;
           if (!any_in) continue;  // no output

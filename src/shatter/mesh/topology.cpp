@@ -12,19 +12,36 @@ TetFaces compute_faces(const TetMesh& mesh) {
     int local;
   };
   const Index nt = mesh.num_tets();
-  std::vector<Entry> entries;
-  entries.reserve(static_cast<std::size_t>(nt) * 4);
+  // Bucket the 4 nt face entries by their smallest corner (counting sort, stable in (tet, local)
+  // order), then sort each small bucket by the other two corners: same order as sorting by
+  // (key, tet, local), in linear time.
+  const std::size_t nn = mesh.positions.size();
+  std::vector<std::int64_t> start(nn + 1, 0);
+  std::vector<std::array<Index, 3>> keys(static_cast<std::size_t>(nt) * 4);
   for (Index e = 0; e < nt; ++e)
     for (int k = 0; k < 4; ++k) {
       std::array<Index, 3> key = {mesh.tets[e][kTetFaces[k][0]], mesh.tets[e][kTetFaces[k][1]],
                                   mesh.tets[e][kTetFaces[k][2]]};
       std::sort(key.begin(), key.end());
-      entries.push_back({key, e, k});
+      keys[static_cast<std::size_t>(e) * 4 + static_cast<std::size_t>(k)] = key;
+      ++start[static_cast<std::size_t>(key[0]) + 1];
     }
-  std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
-    if (a.key != b.key) return a.key < b.key;
-    return a.tet != b.tet ? a.tet < b.tet : a.local < b.local;
-  });
+  for (std::size_t v = 0; v < nn; ++v) start[v + 1] += start[v];
+  std::vector<Entry> entries(keys.size());
+  {
+    std::vector<std::int64_t> fill(start.begin(), start.end() - 1);
+    for (Index e = 0; e < nt; ++e)
+      for (int k = 0; k < 4; ++k) {
+        const auto& key = keys[static_cast<std::size_t>(e) * 4 + static_cast<std::size_t>(k)];
+        entries[static_cast<std::size_t>(fill[static_cast<std::size_t>(key[0])]++)] = {key, e, k};
+      }
+  }
+  for (std::size_t v = 0; v < nn; ++v)
+    std::sort(entries.begin() + start[v], entries.begin() + start[v + 1], [](const Entry& a, const Entry& b) {
+      if (a.key[1] != b.key[1]) return a.key[1] < b.key[1];
+      if (a.key[2] != b.key[2]) return a.key[2] < b.key[2];
+      return a.tet != b.tet ? a.tet < b.tet : a.local < b.local;
+    });
   TetFaces out;
   out.tet_faces.assign(nt, {-1, -1, -1, -1});
   for (std::size_t i = 0; i < entries.size();) {

@@ -34,6 +34,7 @@ struct TetFaces {
 };
 
 /// Unique faces, deterministic order (sorted by their sorted corner indices).
+/// Requires every tet node index in [0, num_nodes) (validate_mesh checks that first).
 TetFaces compute_faces(const TetMesh& mesh);
 
 /// A triangle surface: positions indexed by triangles.

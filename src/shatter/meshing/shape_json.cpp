@@ -196,9 +196,9 @@ Result<ShapeFile> parse_shape_json(std::string_view text, const std::string& fil
   Parser p{file_name, options};
   if (!j.is_object()) return p.error("", "expected a JSON object with a \"shape\"");
   for (const auto& [key, value] : j.items())
-    if (key != "name" && key != "shape" && key != "edge_length" && key != "tets" && key != "grading" &&
+    if (key != "name" && key != "shape" && key != "edge_length" && key != "tets" && key != "grading" && key != "sharpen" &&
         key != "comment")
-      return p.error(key, "unknown key; expected name, shape, edge_length, tets, grading, comment");
+      return p.error(key, "unknown key; expected name, shape, edge_length, tets, grading, sharpen, comment");
   ShapeFile out;
   if (j.contains("name")) {
     if (!j.at("name").is_string()) return p.error("name", "expected a string");
@@ -218,6 +218,10 @@ Result<ShapeFile> parse_shape_json(std::string_view text, const std::string& fil
     if (!g.is_number() || !(g.get<double>() >= 0) || !std::isfinite(g.get<double>()))
       return p.error("grading", "expected a number >= 0");
     out.grading = g.get<double>();
+  }
+  if (j.contains("sharpen")) {
+    if (!j.at("sharpen").is_boolean()) return p.error("sharpen", "expected true or false");
+    out.sharpen = j.at("sharpen").get<bool>();
   }
   if (!j.contains("shape")) return p.error("shape", "missing; expected a shape object");
   SHATTER_TRY(s, p.node(j.at("shape"), "shape"));

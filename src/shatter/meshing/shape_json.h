@@ -20,6 +20,7 @@ struct ShapeFile {
   double edge_length = 0;        ///< "edge_length" (m) if given, else 0
   std::int64_t target_tets = 0;  ///< "tets" if given, else 0
   double grading = 0;            ///< "grading" (stuffing.h) if given, else 0
+  bool sharpen = true;           ///< "sharpen" (stuffing.h) if given, else true
 };
 
 /// Loads a closed surface file for {"type": "surface", "file": ...}; the path is already resolved

@@ -11,14 +11,13 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <string>
 #include <vector>
 
 #include "shatter/core/parallel.h"
-#include "shatter/mesh/quality.h"
 #include "shatter/mesh/topology.h"
 #include "shatter/meshing/coarsen.h"
+#include "shatter/meshing/sharpen.h"
 #include "shatter/meshing/stuffing_stencil.h"
 #include "shatter/mesh/validate.h"
 
@@ -209,16 +208,15 @@ struct Stuffer {
       any_in |= s < 0;
       any_out |= s > 0;
     }
-    if (any_out && !any_in) return;
-    if (!any_out && any_in) {
+    // No inside vertex: nothing, including a tet whose four vertices were all warped onto the
+    // surface (it lies on the surface; keeping it can pinch the boundary at an edge, and nothing
+    // bounds its shape). No outside vertex: the whole tet.
+    if (!any_in) return;
+    if (!any_out) {
       out.push_back({key[0], key[1], key[2], key[3]});
       return;
     }
     for (int i = 0; i < 4; ++i) in.x[static_cast<std::size_t>(i)] = pos[static_cast<std::size_t>(key[static_cast<std::size_t>(i)])];
-    if (!any_in) {  // every vertex on the surface: outside the table
-      if (keep_surface_tet(in.x)) out.push_back({key[0], key[1], key[2], key[3]});
-      return;
-    }
     for (int e = 0; e < 6; ++e) {
       const int i = stuffing::kStencilEdges[e][0], j = stuffing::kStencilEdges[e][1];
       if (in.sign[static_cast<std::size_t>(i)] * in.sign[static_cast<std::size_t>(j)] >= 0) continue;
@@ -244,19 +242,6 @@ struct Stuffer {
       const auto& l = st.tets[static_cast<std::size_t>(t)];
       out.push_back({key[l[0]], key[l[1]], key[l[2]], key[l[3]]});
     }
-  }
-
-  // A tet whose four vertices were all warped onto the surface lies on it: kept when its centre
-  // is inside and its dihedral angles are inside the stencil table's bounds.
-  bool keep_surface_tet(const std::array<Vec3, 10>& x) const {
-    Mat34 m;
-    for (int i = 0; i < 4; ++i) m.col(i) = x[static_cast<std::size_t>(i)];
-    if (!(sdf(0.25 * (m.col(0) + m.col(1) + m.col(2) + m.col(3))) < 0)) return false;
-    for (double a : dihedral_angles(m)) {
-      const double deg = a * (180.0 / std::numbers::pi);
-      if (!(deg >= kStuffingMinDihedralDeg && deg <= kStuffingMaxDihedralDeg)) return false;
-    }
-    return true;
   }
 
   // All output tets as keys, black points in lattice order (z slabs in parallel, joined in order).
@@ -351,6 +336,16 @@ Result<TetMesh> stuff_once(const Sdf& sdf, const StuffingDef& def, double h, Stu
     if (v < 0) std::swap(t[2], t[3]);
     mesh.tets[static_cast<std::size_t>(e)] = t;
   });
+  // Sharpening and grading change tets only inside [min_changed, max_changed] (within the stencil
+  // bounds), so they keep the bounds and most of the uniform mesh's quality.
+  const double min_changed = std::max(kStuffingMinDihedralDeg, def.changed_min_dihedral_deg);
+  const double max_changed = std::min(kStuffingMaxDihedralDeg, def.changed_max_dihedral_deg);
+  std::int64_t sharpened = 0;
+  if (def.sharpen) {
+    auto r = sharpen_features(mesh, sdf, {.edge_length = h, .min_dihedral_deg = min_changed, .max_dihedral_deg = max_changed});
+    if (!r) return std::move(r.error());
+    sharpened = r->moved;
+  }
   std::int64_t uniform_tets = mesh.num_tets();
   if (def.grading > 0) {
     // Wanted size: h down to depth h, then growing by `grading` per unit depth (depth = -sdf; a
@@ -358,15 +353,14 @@ Result<TetMesh> stuff_once(const Sdf& sdf, const StuffingDef& def, double h, Stu
     const double g = def.grading, cap = def.max_size_ratio * h;
     CoarsenDef cd;
     cd.size = [&sdf, g, h, cap](const Vec3& x) { return std::min(cap, h + g * std::max(0.0, -sdf(x) - h)); };
-    // Changed tets must be well inside the stencil bounds, so grading keeps the mesh's quality
-    // near that of the uniform mesh rather than spending the whole allowance.
-    cd.min_dihedral_deg = std::max(kStuffingMinDihedralDeg, def.graded_min_dihedral_deg);
-    cd.max_dihedral_deg = std::min(kStuffingMaxDihedralDeg, def.graded_max_dihedral_deg);
+    cd.min_dihedral_deg = min_changed;
+    cd.max_dihedral_deg = max_changed;
     auto r = coarsen_interior(mesh, cd);
     if (!r) return std::move(r.error());
   }
   if (report) {
     report->tets_before_grading = uniform_tets;
+    report->sharpened = sharpened;
     report->edge_length = h;
     report->lattice_vertices = st.nl;
     report->cut_points = cuts;

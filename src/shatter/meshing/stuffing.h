@@ -25,8 +25,8 @@ inline constexpr double kStuffingAlphaLong = 0.24999;
 inline constexpr double kStuffingAlphaShort = 0.41189;
 /// Dihedral-angle bounds of every tet stuffing outputs with these alphas, degrees: the extremes of
 /// the stencil table over every configuration a warped BCC tet can take, found by exhaustive grid
-/// and local search (tests/meshing/test_stuffing_stencil.cpp; docs/meshing.md). Tets whose four
-/// vertices all lie on the surface are outside the table; they are kept only inside these bounds.
+/// and local search (tests/meshing/test_stuffing_stencil.cpp; docs/meshing.md). Sharpening and
+/// grading only make changes that keep every tet inside them.
 inline constexpr double kStuffingMinDihedralDeg = 9.3;
 inline constexpr double kStuffingMaxDihedralDeg = 161.7;
 
@@ -38,15 +38,18 @@ struct StuffingDef {
   /// Warp thresholds as fractions of the edge length (Labelle & Shewchuk 2007, section 3).
   double alpha_long = kStuffingAlphaLong;
   double alpha_short = kStuffingAlphaShort;
+  /// Move boundary nodes onto the shape's creases and corners (sharpen.h), inside the dihedral
+  /// bounds, so sharp edges stay sharp instead of being rounded at the scale of h.
+  bool sharpen = true;
   /// Grading: 0 keeps every tet at the lattice size. g > 0 coarsens the inside after stuffing
   /// (coarsen.h): the wanted edge length grows from h at depth h below the surface by g per unit
   /// depth, up to max_size_ratio * h. The boundary and the dihedral-angle bounds are kept.
   double grading = 0.0;
   double max_size_ratio = 8.0;
-  /// Dihedral-angle range every tet changed by grading must keep, degrees (clamped to the stencil
-  /// bounds): tighter than the bounds so grading does not lower the mesh's quality much.
-  double graded_min_dihedral_deg = 18.0;
-  double graded_max_dihedral_deg = 145.0;
+  /// Dihedral-angle range every tet changed by sharpening or grading must keep, degrees (clamped
+  /// to the stencil bounds): tighter than the bounds, so neither lowers the mesh's quality much.
+  double changed_min_dihedral_deg = 15.0;
+  double changed_max_dihedral_deg = 150.0;
   /// False-position iterations for each cut point (distance functions converge in a few).
   int root_iterations = 16;
   /// Refuse lattices larger than this (memory guard).
@@ -59,7 +62,8 @@ struct StuffingReport {
   std::int64_t cut_points = 0;        ///< cut points kept after warping
   std::int64_t warped = 0;            ///< lattice vertices warped onto the surface
   int attempts = 1;                   ///< meshings tried to reach target_tets
-  std::int64_t tets_before_grading = 0;  ///< tets of the uniform mesh (= tets without grading)
+  std::int64_t tets_before_grading = 0;
+  std::int64_t sharpened = 0;         ///< boundary node moves onto creases and corners  ///< tets of the uniform mesh (= tets without grading)
 };
 
 /// Mesh the inside (sdf < 0) of the shape. Nodes: used lattice vertices in lattice order, then cut

@@ -8,6 +8,7 @@
 #include "shatter/meshing/stuffing_stencil.h"
 
 #include <cmath>
+#include <algorithm>
 #include <limits>
 
 namespace shatter::stuffing {
@@ -89,10 +90,7 @@ StencilOutput fill_stencil(const StencilInput& in) {
     else if (in.sign[static_cast<std::size_t>(i)] > 0) pos[np++] = i;
     else zer[nz++] = i;
   }
-  if (nn == 0) {
-    out.all_zero = np == 0;
-    return out;
-  }
+  if (nn == 0) return out;
   if (np == 0) {
     emit(out, 0, 1, 2, 3);
     return out;

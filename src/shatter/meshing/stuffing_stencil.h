@@ -47,12 +47,10 @@ struct StencilInput {
 struct StencilOutput {
   std::array<std::array<std::uint8_t, 4>, 3> tets{};
   int count = 0;
-  /// Every vertex is 0: the tet lies on the surface and is not covered by the table (the caller
-  /// decides; isosurface stuffing keeps it only when it is inside and well shaped).
-  bool all_zero = false;
 };
 
-/// Fill one BCC tet. The quadrilateral faces a clipped tet shares with its neighbours are split
+/// Fill one BCC tet: nothing without an inside vertex (also when all four are on the surface),
+/// the whole tet without an outside vertex, else one of six clipped cases. The quadrilateral faces a clipped tet shares with its neighbours are split
 /// by a rule of the face alone: when the face's two inside vertices a, b are joined by a short
 /// edge, the diagonal runs from the vertex whose edge to the outside vertex is short to the cut
 /// point on the long edge; when they are joined by a long edge, by the parity rule above. The
