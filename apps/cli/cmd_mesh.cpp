@@ -34,7 +34,7 @@ struct MeshArgs {
   double edge_length = 0;
   std::int64_t tets = 0;
   double refine = 1.0;
-  double grading = -1;  // < 0: from the shape file, else 0
+  std::optional<double> grading;  // unset: from the shape file, else 0
   bool binary = false, json = false, no_reference = false, no_sharpen = false;
   int threads = 0;
   std::string method = "auto";
@@ -125,10 +125,11 @@ int run_mesh(const MeshArgs& a) {
   }
   if (!(def.edge_length > 0) && def.target_tets <= 0)
     return report_error("give --edge-length H (m) or --tets N", kExitUsage);
-  if (a.grading >= 0) def.grading = a.grading;
+  if (a.grading) {
+    if (!(*a.grading >= 0) || !std::isfinite(*a.grading)) return report_error("--grading: expected a number >= 0", kExitUsage);
+    def.grading = *a.grading;
+  }
   if (a.no_sharpen) def.sharpen = false;
-  if (!std::isfinite(a.grading) || (a.grading < 0 && a.grading != -1))
-    return report_error("--grading: expected a number >= 0", kExitUsage);
   if (!(a.refine > 0) || !std::isfinite(a.refine))
     return report_error("--refine: expected a factor > 0", kExitUsage);
   // About `refine` times as many tets: h / cbrt(refine), or the target count times refine.
