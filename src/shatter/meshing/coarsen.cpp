@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <tuple>
 #include <vector>
 
@@ -24,6 +25,8 @@ Face sorted_face(Index a, Index b, Index c) {
 struct Collapser {
   TetMesh& mesh;
   const CoarsenDef& def;
+  double cos_min = std::cos(def.min_dihedral_deg * std::numbers::pi / 180.0);  // cosine of the smallest angle allowed
+  double cos_max = std::cos(def.max_dihedral_deg * std::numbers::pi / 180.0);
   std::vector<std::vector<Index>> star;  // node -> live tets containing it
   std::vector<char> tet_alive, boundary, locked;
 
@@ -110,21 +113,21 @@ struct Collapser {
     return common_faces.empty();
   }
 
-  // Every tet of star(a) without b, with a moved onto b: positive and inside the angle bounds.
-  // Dihedral angles compared by cosine: the angle at the edge shared by the faces opposite
-  // vertices l and m has cos = -n_l . n_m / (|n_l| |n_m|), n the outward face normals.
-  [[nodiscard]] bool shapes_ok(Index a, Index b) const {
-    const double cos_min = std::cos(def.min_dihedral_deg * std::numbers::pi / 180.0);
-    const double cos_max = std::cos(def.max_dihedral_deg * std::numbers::pi / 180.0);
+  // Extremes of the dihedral-angle cosines over the tets of star(a) that do not contain b (b = -1:
+  // all), with a placed at xa: {largest cosine (smallest angle), smallest cosine (largest angle)};
+  // nullopt when one of them is not positively oriented. The angle at the edge shared by the
+  // faces opposite vertices l and m has cos = -n_l . n_m / (|n_l| |n_m|), n the outward normals.
+  [[nodiscard]] std::optional<std::pair<double, double>> star_cosines(Index a, const Vec3& xa, Index b) const {
+    double cmax = -1, cmin = 1;
     for (Index e : star[static_cast<std::size_t>(a)]) {
       const TetIndices& t = mesh.tets[static_cast<std::size_t>(e)];
-      if (contains(t, b)) continue;
+      if (b >= 0 && contains(t, b)) continue;
       std::array<Vec3, 4> x;
       for (int k = 0; k < 4; ++k) {
-        const Index v = t[static_cast<std::size_t>(k)] == a ? b : t[static_cast<std::size_t>(k)];
-        x[static_cast<std::size_t>(k)] = mesh.positions[static_cast<std::size_t>(v)];
+        const Index v = t[static_cast<std::size_t>(k)];
+        x[static_cast<std::size_t>(k)] = v == a ? xa : mesh.positions[static_cast<std::size_t>(v)];
       }
-      if (!(signed_volume(x[0], x[1], x[2], x[3]) > 0)) return false;
+      if (!(signed_volume(x[0], x[1], x[2], x[3]) > 0)) return std::nullopt;
       // Outward normals of a positive tet: face opposite 0 is (1, 2, 3), and so on.
       const std::array<Vec3, 4> n = {(x[2] - x[1]).cross(x[3] - x[1]), (x[3] - x[0]).cross(x[2] - x[0]),
                                      (x[1] - x[0]).cross(x[3] - x[0]), (x[2] - x[0]).cross(x[1] - x[0])};
@@ -134,9 +137,40 @@ struct Collapser {
         for (int m = l + 1; m < 4; ++m) {
           const double c = -n[static_cast<std::size_t>(l)].dot(n[static_cast<std::size_t>(m)]) /
                            (len[static_cast<std::size_t>(l)] * len[static_cast<std::size_t>(m)]);
-          if (!(c <= cos_min && c >= cos_max)) return false;
+          cmax = std::max(cmax, c);
+          cmin = std::min(cmin, c);
         }
     }
+    return std::pair{cmax, cmin};
+  }
+
+  [[nodiscard]] bool in_bounds(const std::optional<std::pair<double, double>>& c) const {
+    return c && c->first <= cos_min && c->second >= cos_max;
+  }
+
+  // Every tet of star(a) without b, with a moved onto b: positive and inside the angle bounds.
+  [[nodiscard]] bool shapes_ok(Index a, Index b) const {
+    return in_bounds(star_cosines(a, mesh.positions[static_cast<std::size_t>(b)], b));
+  }
+
+  // Move interior node v to the centre of its neighbours when that keeps its tets in bounds and
+  // makes neither its smallest nor its largest dihedral angle worse (lets later collapses pass the
+  // shape test). Returns whether it moved.
+  bool smooth(Index v) {
+    if (boundary[static_cast<std::size_t>(v)] || star[static_cast<std::size_t>(v)].empty()) return false;
+    Vec3 c = Vec3::Zero();
+    int n = 0;
+    for (Index e : star[static_cast<std::size_t>(v)])
+      for (Index w : mesh.tets[static_cast<std::size_t>(e)])
+        if (w != v) {
+          c += mesh.positions[static_cast<std::size_t>(w)];
+          ++n;
+        }
+    c /= n;  // neighbours weighted by how many tets they share with v
+    const auto now = star_cosines(v, mesh.positions[static_cast<std::size_t>(v)], -1);
+    const auto moved = star_cosines(v, c, -1);
+    if (!now || !in_bounds(moved) || moved->first > now->first || moved->second < now->second) return false;
+    mesh.positions[static_cast<std::size_t>(v)] = c;
     return true;
   }
 
@@ -219,6 +253,9 @@ Result<CoarsenReport> coarsen_interior(TetMesh& mesh, const CoarsenDef& def) {
   for (int p = 0; p < def.max_passes; ++p) {
     int done = 0;
     active = c.pass(active, done);
+    // Smooth the nodes the collapses touched, in node order (deterministic).
+    for (std::size_t v = 0; v < active.size(); ++v)
+      if (active[v] && c.smooth(static_cast<Index>(v))) ++report.smoothed;
     report.collapses += done;
     report.passes = p + 1;
     if (done == 0) break;

@@ -5,7 +5,9 @@
 // shortest first, until edges are about as long as a sizing function asks (typically growing with
 // depth below the surface). A collapse is made only when it keeps the mesh a valid triangulation
 // of the same region (link condition, every changed tet positively oriented) and every changed tet
-// inside the given dihedral-angle bounds, so a mesh inside the bounds stays inside them. Boundary
+// inside the given dihedral-angle bounds, so a mesh inside the bounds stays inside them. After each
+// pass the interior nodes the collapses touched move to the centre of their neighbours when that
+// makes none of their tets worse (so more collapses pass the shape test next time). Boundary
 // nodes never move or disappear: the boundary surface and the volume are unchanged.
 // Sequential and ordered by (length, node ids): the result does not depend on the thread count.
 #pragma once
@@ -30,6 +32,7 @@ struct CoarsenDef {
 
 struct CoarsenReport {
   Index collapses = 0;
+  Index smoothed = 0;  ///< interior node moves to the centre of their neighbours
   int passes = 0;
   Index tets_before = 0, tets_after = 0;
 };
