@@ -29,6 +29,13 @@ struct Collapser {
   double cos_max = std::cos(def.max_dihedral_deg * std::numbers::pi / 180.0);
   std::vector<std::vector<Index>> star;  // node -> live tets containing it
   std::vector<char> tet_alive, boundary, locked;
+  std::vector<double> node_size;  // wanted size at each node, or -1 when not yet evaluated
+
+  double size_at(Index v) {
+    double& s = node_size[static_cast<std::size_t>(v)];
+    if (s < 0) s = def.size(mesh.positions[static_cast<std::size_t>(v)]);
+    return s;
+  }
 
   void build() {
     const Index n = mesh.num_nodes();
@@ -36,6 +43,7 @@ struct Collapser {
     for (Index e = 0; e < mesh.num_tets(); ++e)
       for (Index v : mesh.tets[static_cast<std::size_t>(e)]) star[static_cast<std::size_t>(v)].push_back(e);
     tet_alive.assign(mesh.tets.size(), 1);
+    node_size.assign(static_cast<std::size_t>(n), -1.0);
     // Boundary nodes: on a face that only one tet has.
     std::vector<Face> faces;
     faces.reserve(mesh.tets.size() * 4);
@@ -117,7 +125,9 @@ struct Collapser {
   // all), with a placed at xa: {largest cosine (smallest angle), smallest cosine (largest angle)};
   // nullopt when one of them is not positively oriented. The angle at the edge shared by the
   // faces opposite vertices l and m has cos = -n_l . n_m / (|n_l| |n_m|), n the outward normals.
-  [[nodiscard]] std::optional<std::pair<double, double>> star_cosines(Index a, const Vec3& xa, Index b) const {
+  // With early_out, stops (returning nullopt) at the first angle outside the bounds.
+  [[nodiscard]] std::optional<std::pair<double, double>> star_cosines(Index a, const Vec3& xa, Index b,
+                                                                      bool early_out = false) const {
     double cmax = -1, cmin = 1;
     for (Index e : star[static_cast<std::size_t>(a)]) {
       const TetIndices& t = mesh.tets[static_cast<std::size_t>(e)];
@@ -139,6 +149,7 @@ struct Collapser {
                            (len[static_cast<std::size_t>(l)] * len[static_cast<std::size_t>(m)]);
           cmax = std::max(cmax, c);
           cmin = std::min(cmin, c);
+          if (early_out && !(c <= cos_min && c >= cos_max)) return std::nullopt;
         }
     }
     return std::pair{cmax, cmin};
@@ -150,7 +161,7 @@ struct Collapser {
 
   // Every tet of star(a) without b, with a moved onto b: positive and inside the angle bounds.
   [[nodiscard]] bool shapes_ok(Index a, Index b) const {
-    return in_bounds(star_cosines(a, mesh.positions[static_cast<std::size_t>(b)], b));
+    return in_bounds(star_cosines(a, mesh.positions[static_cast<std::size_t>(b)], b, true));
   }
 
   // Move interior node v to the centre of its neighbours when that keeps its tets in bounds and
@@ -171,6 +182,7 @@ struct Collapser {
     const auto moved = star_cosines(v, c, -1);
     if (!now || !in_bounds(moved) || moved->first > now->first || moved->second < now->second) return false;
     mesh.positions[static_cast<std::size_t>(v)] = c;
+    node_size[static_cast<std::size_t>(v)] = -1;
     return true;
   }
 
@@ -224,7 +236,7 @@ struct Collapser {
         const Vec3& pa = mesh.positions[v];
         const Vec3& pb = mesh.positions[static_cast<std::size_t>(w)];
         const double len = (pa - pb).norm();
-        if (len < def.collapse_ratio * def.size(0.5 * (pa + pb)))
+        if (len < def.collapse_ratio * 0.5 * (size_at(static_cast<Index>(v)) + size_at(w)))
           shortlist.emplace_back(len, std::min(static_cast<Index>(v), w), std::max(static_cast<Index>(v), w));
       }
     }

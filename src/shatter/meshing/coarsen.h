@@ -20,8 +20,8 @@
 namespace shatter {
 
 struct CoarsenDef {
-  /// Wanted edge length at a point, m (> 0). Edges shorter than `collapse_ratio` times the size at
-  /// their midpoint are collapsed when allowed.
+  /// Wanted edge length at a point, m (> 0). Edges shorter than `collapse_ratio` times the mean of
+  /// the sizes at their ends are collapsed when allowed.
   std::function<double(const Vec3&)> size;
   double collapse_ratio = 0.8;
   /// Every tet a collapse changes must have dihedral angles inside [min, max], degrees.
