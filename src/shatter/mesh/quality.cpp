@@ -6,9 +6,10 @@
 
 namespace shatter {
 
-std::array<double, 6> dihedral_angles(const Mat34& x) {
+std::array<double, 6> dihedral_cosines(const Mat34& x) {
   // Outward face normals n_k (face opposite corner k); the dihedral angle at the edge shared by
-  // faces k and l is pi - angle(n_k, n_l). Edge (i,j) is shared by the faces opposite the other two.
+  // faces k and l is pi - angle(n_k, n_l), so its cosine is -n_k . n_l. Edge (i,j) is shared by
+  // the faces opposite the other two.
   std::array<Vec3, 4> n;
   for (int k = 0; k < 4; ++k) {
     const int a = (k + 1) % 4, b = (k + 2) % 4, c = (k + 3) % 4;
@@ -23,9 +24,14 @@ std::array<double, 6> dihedral_angles(const Mat34& x) {
     int other[2], m = 0;
     for (int k = 0; k < 4; ++k)
       if (k != edges[e][0] && k != edges[e][1]) other[m++] = k;
-    const double c = std::clamp(n[other[0]].dot(n[other[1]]), -1.0, 1.0);
-    out[e] = M_PI - std::acos(c);
+    out[e] = -n[other[0]].dot(n[other[1]]);
   }
+  return out;
+}
+
+std::array<double, 6> dihedral_angles(const Mat34& x) {
+  std::array<double, 6> out = dihedral_cosines(x);
+  for (double& c : out) c = M_PI - std::acos(std::clamp(-c, -1.0, 1.0));
   return out;
 }
 

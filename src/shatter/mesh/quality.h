@@ -9,6 +9,9 @@ namespace shatter {
 
 /// The six interior dihedral angles of the tet, radians, at edges (01,02,03,12,13,23).
 std::array<double, 6> dihedral_angles(const Mat34& x);
+/// Their cosines, without the arc cosine (for comparisons against fixed bounds); 0 at an edge of
+/// a degenerate face.
+std::array<double, 6> dihedral_cosines(const Mat34& x);
 
 /// Aspect ratio = circumradius / (3 * inradius): 1 for the regular tet, larger is worse,
 /// +inf for a degenerate tet.

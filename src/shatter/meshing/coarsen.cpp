@@ -9,6 +9,8 @@
 #include <tuple>
 #include <vector>
 
+#include "shatter/mesh/quality.h"
+
 
 namespace shatter {
 namespace {
@@ -123,8 +125,7 @@ struct Collapser {
 
   // Extremes of the dihedral-angle cosines over the tets of star(a) that do not contain b (b = -1:
   // all), with a placed at xa: {largest cosine (smallest angle), smallest cosine (largest angle)};
-  // nullopt when one of them is not positively oriented. The angle at the edge shared by the
-  // faces opposite vertices l and m has cos = -n_l . n_m / (|n_l| |n_m|), n the outward normals.
+  // nullopt when one of them is not positively oriented.
   // With early_out, stops (returning nullopt) at the first angle outside the bounds.
   [[nodiscard]] std::optional<std::pair<double, double>> star_cosines(Index a, const Vec3& xa, Index b,
                                                                       bool early_out = false) const {
@@ -138,19 +139,13 @@ struct Collapser {
         x[static_cast<std::size_t>(k)] = v == a ? xa : mesh.positions[static_cast<std::size_t>(v)];
       }
       if (!(signed_volume(x[0], x[1], x[2], x[3]) > 0)) return std::nullopt;
-      // Outward normals of a positive tet: face opposite 0 is (1, 2, 3), and so on.
-      const std::array<Vec3, 4> n = {(x[2] - x[1]).cross(x[3] - x[1]), (x[3] - x[0]).cross(x[2] - x[0]),
-                                     (x[1] - x[0]).cross(x[3] - x[0]), (x[2] - x[0]).cross(x[1] - x[0])};
-      std::array<double, 4> len;
-      for (int k = 0; k < 4; ++k) len[static_cast<std::size_t>(k)] = n[static_cast<std::size_t>(k)].norm();
-      for (int l = 0; l < 4; ++l)
-        for (int m = l + 1; m < 4; ++m) {
-          const double c = -n[static_cast<std::size_t>(l)].dot(n[static_cast<std::size_t>(m)]) /
-                           (len[static_cast<std::size_t>(l)] * len[static_cast<std::size_t>(m)]);
-          cmax = std::max(cmax, c);
-          cmin = std::min(cmin, c);
-          if (early_out && !(c <= cos_min && c >= cos_max)) return std::nullopt;
-        }
+      Mat34 m;
+      for (int k = 0; k < 4; ++k) m.col(k) = x[static_cast<std::size_t>(k)];
+      for (double c : dihedral_cosines(m)) {
+        cmax = std::max(cmax, c);
+        cmin = std::min(cmin, c);
+        if (early_out && !(c <= cos_min && c >= cos_max)) return std::nullopt;
+      }
     }
     return std::pair{cmax, cmin};
   }

@@ -11,6 +11,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "shatter/core/parallel.h"
+#include "shatter/mesh/quality.h"
 #include "shatter/mesh/topology.h"
 
 namespace shatter {
@@ -157,24 +158,15 @@ struct Sharpener {
   }
 
   [[nodiscard]] bool shapes_ok(Index v, const Vec3& x) const {
-    const double to_deg = 180.0 / std::numbers::pi;
+    const double cos_min = std::cos(def.min_dihedral_deg * std::numbers::pi / 180.0);
+    const double cos_max = std::cos(def.max_dihedral_deg * std::numbers::pi / 180.0);
     for (Index e : star(v)) {
       Mat34 c = mesh.corners(e);
       for (int k = 0; k < 4; ++k)
         if (mesh.tets[static_cast<std::size_t>(e)][static_cast<std::size_t>(k)] == v) c.col(k) = x;
       if (!(signed_volume(c.col(0), c.col(1), c.col(2), c.col(3)) > 0)) return false;
-      // Dihedral angle at the edge shared by the faces opposite l and m: from outward normals.
-      const std::array<Vec3, 4> n = {(c.col(2) - c.col(1)).cross(c.col(3) - c.col(1)),
-                                     (c.col(3) - c.col(0)).cross(c.col(2) - c.col(0)),
-                                     (c.col(1) - c.col(0)).cross(c.col(3) - c.col(0)),
-                                     (c.col(2) - c.col(0)).cross(c.col(1) - c.col(0))};
-      for (int l = 0; l < 4; ++l)
-        for (int m = l + 1; m < 4; ++m) {
-          const double cs = -n[static_cast<std::size_t>(l)].dot(n[static_cast<std::size_t>(m)]) /
-                            (n[static_cast<std::size_t>(l)].norm() * n[static_cast<std::size_t>(m)].norm());
-          const double deg = std::acos(std::clamp(cs, -1.0, 1.0)) * to_deg;
-          if (!(deg >= def.min_dihedral_deg && deg <= def.max_dihedral_deg)) return false;
-        }
+      for (double cs : dihedral_cosines(c))
+        if (!(cs <= cos_min && cs >= cos_max)) return false;
     }
     return true;
   }
