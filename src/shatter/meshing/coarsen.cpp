@@ -30,7 +30,7 @@ struct Collapser {
   double cos_min = std::cos(def.min_dihedral_deg * std::numbers::pi / 180.0);  // cosine of the smallest angle allowed
   double cos_max = std::cos(def.max_dihedral_deg * std::numbers::pi / 180.0);
   std::vector<std::vector<Index>> star;  // node -> live tets containing it
-  std::vector<char> tet_alive, boundary, locked;
+  std::vector<char> tet_alive, boundary, touched;
   std::vector<double> node_size;  // wanted size at each node, or -1 when not yet evaluated
 
   double size_at(Index v) {
@@ -185,7 +185,7 @@ struct Collapser {
     std::vector<Index>& sb = star[static_cast<std::size_t>(b)];
     for (Index e : star[static_cast<std::size_t>(a)]) {
       TetIndices& t = mesh.tets[static_cast<std::size_t>(e)];
-      for (Index v : t) locked[static_cast<std::size_t>(v)] = 1;
+      for (Index v : t) touched[static_cast<std::size_t>(v)] = 1;
       if (contains(t, b)) {  // the tets around edge ab vanish
         tet_alive[static_cast<std::size_t>(e)] = 0;
         for (Index v : t) {
@@ -210,8 +210,9 @@ struct Collapser {
 
   // One pass: candidate edges with an end in `active` (every node on the first pass; afterwards the
   // nodes whose stars changed, since a refused collapse only changes its verdict when a star it
-  // looks at changes), short for the size at their midpoint, tried shortest first (ties by node
-  // ids). A collapse locks its star for the rest of the pass. Returns the nodes whose stars changed.
+  // looks at changes), short for the sizes at their ends, tried shortest first (ties by node ids).
+  // Each try checks the mesh as the earlier collapses of the pass left it (an edge that no longer
+  // exists is skipped). Returns the nodes whose stars changed.
   std::vector<char> pass(const std::vector<char>& active, int& done) {
     std::vector<std::tuple<double, Index, Index>> shortlist;
     std::vector<Index> nbr;
@@ -236,13 +237,16 @@ struct Collapser {
       }
     }
     std::sort(shortlist.begin(), shortlist.end());
-    locked.assign(mesh.positions.size(), 0);
+    touched.assign(mesh.positions.size(), 0);
     done = 0;
     for (const auto& [len, a, b] : shortlist) {
-      if (locked[static_cast<std::size_t>(a)] || locked[static_cast<std::size_t>(b)]) continue;
+      const auto& sa = star[static_cast<std::size_t>(a)];
+      if (sa.empty() || star[static_cast<std::size_t>(b)].empty()) continue;  // collapsed away
+      if (std::none_of(sa.begin(), sa.end(), [&](Index e) { return contains(mesh.tets[static_cast<std::size_t>(e)], b); }))
+        continue;  // no longer an edge
       if (try_collapse(a, b) || try_collapse(b, a)) ++done;
     }
-    return locked;
+    return touched;
   }
 };
 

@@ -30,10 +30,11 @@ Vec3 normal_at(const Sdf& sdf, const Vec3& p, double eps) {
   return n > 0 ? Vec3(g / n) : Vec3::Zero();
 }
 
-// Newton steps along the gradient onto the zero set.
-Vec3 project(const Sdf& sdf, Vec3 p, double eps) {
+// Newton steps along the gradient onto the zero set (until |sdf| <= tol).
+Vec3 project(const Sdf& sdf, Vec3 p, double eps, double tol) {
   for (int it = 0; it < 4; ++it) {
     const double f = sdf(p);
+    if (std::abs(f) <= tol) break;
     const Vec3 n = normal_at(sdf, p, eps);
     if (n.isZero()) break;
     p -= f * n;
@@ -114,7 +115,7 @@ struct Sharpener {
     }
     std::vector<Vec3> pts, nrm;
     auto add = [&](const Vec3& q) {
-      const Vec3 p = project(sdf, q, eps);
+      const Vec3 p = project(sdf, q, eps, 1e-9 * h);
       const Vec3 n = normal_at(sdf, p, eps);
       if (n.isZero() || (p - q).norm() > 0.5 * h) return;
       pts.push_back(p);
@@ -182,23 +183,31 @@ Result<SharpenReport> sharpen_features(TetMesh& mesh, const Sdf& sdf, const Shar
   s.build();
   SharpenReport report;
   report.boundary_nodes = static_cast<Index>(s.boundary_nodes.size());
-  std::vector<Vec3> targets(s.boundary_nodes.size());
+  const std::size_t nb = s.boundary_nodes.size();
+  std::vector<Vec3> targets(nb);
+  std::vector<char> dirty(nb, 1), next(nb);
   for (int pass = 0; pass < def.passes; ++pass) {
-    // Targets from the current positions (in parallel), then moves in node order (sequential,
-    // each checked against the positions the earlier moves left).
-    parallel_for(0, static_cast<std::int64_t>(s.boundary_nodes.size()), [&](std::int64_t i) {
-      targets[static_cast<std::size_t>(i)] = s.target(s.boundary_nodes[static_cast<std::size_t>(i)]);
+    // Targets from the current positions (in parallel) for the nodes whose surroundings changed
+    // (all on the first pass), then moves in node order (sequential, each checked against the
+    // positions the earlier moves left).
+    parallel_for(0, static_cast<std::int64_t>(nb), [&](std::int64_t i) {
+      const Index v = s.boundary_nodes[static_cast<std::size_t>(i)];
+      targets[static_cast<std::size_t>(i)] = dirty[static_cast<std::size_t>(i)] ? s.target(v) : mesh.positions[static_cast<std::size_t>(v)];
     }, 16);
+    std::fill(next.begin(), next.end(), 0);
     Index moved = 0;
-    for (std::size_t i = 0; i < s.boundary_nodes.size(); ++i) {
+    for (std::size_t i = 0; i < nb; ++i) {
       const Index v = s.boundary_nodes[i];
       if (targets[i] == mesh.positions[static_cast<std::size_t>(v)]) continue;
       if (!s.shapes_ok(v, targets[i])) continue;
       mesh.positions[static_cast<std::size_t>(v)] = targets[i];
       ++moved;
+      for (const TriIndices& t : s.ring(v))
+        for (Index w : t) next[static_cast<std::size_t>(s.slot[static_cast<std::size_t>(w)])] = 1;
     }
     report.moved += moved;
     if (moved == 0) break;
+    dirty.swap(next);
   }
   return report;
 }
