@@ -262,6 +262,15 @@ TEST(StuffingGrading, CoarsensTheInsideKeepingBoundaryVolumeAndBounds) {
   EXPECT_GT(sum / n, 1.5 * h);
 }
 
+// A tet count asked with grading is the count of the graded mesh (h is searched with grading on).
+TEST(StuffingGrading, TargetTetCountIsTheGradedCount) {
+  StuffingReport r;
+  auto m = stuff_tets(Sdf::ellipsoid(Vec3(0.12, 0.08, 0.1)), {.target_tets = 8000, .grading = 1.0}, &r);
+  ASSERT_OK(m);
+  EXPECT_NEAR(static_cast<double>(m->num_tets()) / 8000.0, 1.0, 0.15);
+  EXPECT_GT(r.tets_before_grading, 3 * m->num_tets() / 2);
+}
+
 TEST(StuffingGrading, DeterministicAcrossThreadsAndRejectsBadParameters) {
   const Sdf s = Sdf::ellipsoid(Vec3(0.1, 0.06, 0.08));
   const int saved = num_threads();
