@@ -94,9 +94,8 @@ struct Angles {
 // vertex unwarped and every cut point at mid-edge is inverted.
 Angles evaluate(const Config& c) {
   Angles a;
-  const StencilOutput out = fill_stencil(make_input(c, false));
-  const StencilOutput ref_out = fill_stencil(make_input(c, true));
   const StencilInput in = make_input(c, false), ref = make_input(c, true);
+  const StencilOutput out = fill_stencil(in);
   for (int t = 0; t < out.count; ++t) {
     const auto& k = out.tets[static_cast<std::size_t>(t)];
     Mat34 x, xr;
@@ -113,7 +112,6 @@ Angles evaluate(const Config& c) {
     }
     ++a.tets;
   }
-  (void)ref_out;
   return a;
 }
 
@@ -243,7 +241,7 @@ TEST(StuffingStencil, TilesTheClippedTetAtMidEdge) {
     for (int i = 0; i <= n; ++i)
       for (int j = 0; i + j <= n; ++j)
         for (int k = 0; i + j + k <= n; ++k) {
-          const double b[4] = {(i + 0.25) / (n + 1.0), (j + 0.25) / (n + 1.0), (k + 0.25) / (n + 1.0), 0};
+          const double b[3] = {(i + 0.25) / (n + 1.0), (j + 0.25) / (n + 1.0), (k + 0.25) / (n + 1.0)};
           const double b3 = 1 - b[0] - b[1] - b[2];
           double s = b[0] * c.kind[0] + b[1] * c.kind[1] + b[2] * c.kind[2] + b3 * c.kind[3];
           ++total;

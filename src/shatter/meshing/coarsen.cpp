@@ -264,9 +264,18 @@ Result<CoarsenReport> coarsen_interior(TetMesh& mesh, const CoarsenDef& def) {
   for (int p = 0; p < def.max_passes; ++p) {
     int done = 0;
     active = c.pass(active, done);
-    // Smooth the nodes the collapses touched, in node order (deterministic).
+    // Smooth the nodes the collapses touched, in node order (deterministic); a moved node's
+    // neighbours see new shapes, so they are tried again in the next pass too.
+    std::vector<char> moved(active.size(), 0);
     for (std::size_t v = 0; v < active.size(); ++v)
-      if (active[v] && c.smooth(static_cast<Index>(v))) ++report.smoothed;
+      if (active[v] && c.smooth(static_cast<Index>(v))) {
+        ++report.smoothed;
+        moved[v] = 1;
+      }
+    for (std::size_t v = 0; v < moved.size(); ++v)
+      if (moved[v])
+        for (Index e : c.star[v])
+          for (Index w : mesh.tets[static_cast<std::size_t>(e)]) active[static_cast<std::size_t>(w)] = 1;
     report.collapses += done;
     report.passes = p + 1;
     if (done == 0) break;

@@ -379,6 +379,9 @@ Result<TetMesh> stuff_once(const Sdf& sdf, const StuffingDef& def, double h, Stu
 
 Result<TetMesh> stuff_tets(const Sdf& sdf, const StuffingDef& def, StuffingReport* report) {
   if (sdf.empty()) return field_error("shape", "no shape given");
+  // A cut point within alpha of both ends would warp both onto it (alpha >= 0.5).
+  if (!(def.alpha_long > 0 && def.alpha_long < 0.5)) return field_error("alpha_long", "expected a number in (0, 0.5)");
+  if (!(def.alpha_short > 0 && def.alpha_short < 0.5)) return field_error("alpha_short", "expected a number in (0, 0.5)");
   if (!(def.grading >= 0) || !std::isfinite(def.grading)) return field_error("grading", "expected a number >= 0");
   if (!(def.max_size_ratio >= 1) || !std::isfinite(def.max_size_ratio))
     return field_error("max_size_ratio", "expected a number >= 1");

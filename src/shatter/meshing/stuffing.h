@@ -35,7 +35,8 @@ struct StuffingDef {
   double edge_length = 0.0;
   /// Wanted number of tets when edge_length == 0 (h searched, within ~10 %).
   std::int64_t target_tets = 0;
-  /// Warp thresholds as fractions of the edge length (Labelle & Shewchuk 2007, section 3).
+  /// Warp thresholds as fractions of the edge length (Labelle & Shewchuk 2007, section 3), in
+  /// (0, 0.5). The dihedral bounds above hold for the default values only.
   double alpha_long = kStuffingAlphaLong;
   double alpha_short = kStuffingAlphaShort;
   /// Move boundary nodes onto the shape's creases and corners (sharpen.h), inside the dihedral
@@ -62,8 +63,8 @@ struct StuffingReport {
   std::int64_t cut_points = 0;        ///< cut points kept after warping
   std::int64_t warped = 0;            ///< lattice vertices warped onto the surface
   int attempts = 1;                   ///< meshings tried to reach target_tets
-  std::int64_t tets_before_grading = 0;
-  std::int64_t sharpened = 0;         ///< boundary node moves onto creases and corners  ///< tets of the uniform mesh (= tets without grading)
+  std::int64_t tets_before_grading = 0;  ///< tets of the uniform mesh (= tets without grading)
+  std::int64_t sharpened = 0;         ///< boundary node moves onto creases and corners
 };
 
 /// Mesh the inside (sdf < 0) of the shape. Nodes: used lattice vertices in lattice order, then cut

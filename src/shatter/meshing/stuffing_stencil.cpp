@@ -49,7 +49,7 @@ double shape(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
 bool fill_prism(const std::array<int, 3>& t0, const std::array<int, 3>& t1, const std::array<bool, 3>& diag,
                 StencilOutput& out) {
   for (int i = 0; i < 3; ++i) {
-    const int prev = (i + 2) % 3, j = (i + 1) % 3, k = (i + 2) % 3;
+    const int j = (i + 1) % 3, k = (i + 2) % 3, prev = k;
     const bool t0_meets = diag[static_cast<std::size_t>(i)] && !diag[static_cast<std::size_t>(prev)];
     const bool t1_meets = diag[static_cast<std::size_t>(prev)] && !diag[static_cast<std::size_t>(i)];
     if (!t0_meets && !t1_meets) continue;
@@ -126,7 +126,7 @@ StencilOutput fill_stencil(const StencilInput& in) {
       StencilOutput trial;
       if (!fill_prism(t0, t1, {d0, d1, d2}, trial)) continue;
       const double s = worst_shape(in, trial);
-      if (s > best_shape) {
+      if (best.count == 0 || s > best_shape) {  // the first acyclic choice even if s is NaN
         best_shape = s;
         best = trial;
       }
@@ -139,7 +139,9 @@ StencilOutput fill_stencil(const StencilInput& in) {
   const std::array<int, 3> t1{cut_point(neg[0], p), cut_point(neg[1], p), cut_point(neg[2], p)};
   std::array<bool, 3> diag{};
   for (int i = 0; i < 3; ++i) diag[static_cast<std::size_t>(i)] = quad_pivot(in, t0[static_cast<std::size_t>(i)], t0[static_cast<std::size_t>((i + 1) % 3)], p) == t0[static_cast<std::size_t>(i)];
-  fill_prism(t0, t1, diag, out);  // never cyclic: the two faces through the long edge to p share a pivot
+  // Never cyclic: the inside vertex L on the long edge to p is the pivot of neither face through
+  // L-p (both pivot on the short-edge vertex), so the three pivots cannot all differ.
+  fill_prism(t0, t1, diag, out);
   return out;
 }
 
