@@ -198,12 +198,12 @@ TEST(Stuffing, BadParameters) {
   auto r2 = stuff_tets(s, {});
   ASSERT_FALSE(r2.ok());
   EXPECT_NE(r2.error().message.find("tet count"), std::string::npos);
-  auto r4 = stuff_tets(s, {.edge_length = 0.01, .alpha_short = 0.5});
-  ASSERT_FALSE(r4.ok());
-  EXPECT_EQ(r4.error().field, "alpha_short");
-  auto r5 = stuff_tets(s, {.edge_length = 0.01, .alpha_long = 0});
-  ASSERT_FALSE(r5.ok());
-  EXPECT_EQ(r5.error().field, "alpha_long");
+  auto ra = stuff_tets(s, {.edge_length = 0.01, .alpha_short = 0.5});
+  ASSERT_FALSE(ra.ok());
+  EXPECT_EQ(ra.error().field, "alpha_short");
+  auto rb = stuff_tets(s, {.edge_length = 0.01, .alpha_long = 0});
+  ASSERT_FALSE(rb.ok());
+  EXPECT_EQ(rb.error().field, "alpha_long");
   auto r3 = stuff_tets(s, {.edge_length = 1e-5});
   ASSERT_FALSE(r3.ok());
   EXPECT_NE(r3.error().message.find("lattice"), std::string::npos) << r3.error().message;
