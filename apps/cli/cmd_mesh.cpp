@@ -243,6 +243,8 @@ int run_mesh(const MeshArgs& a) {
     out += fmt::format("tets         {}\n", mesh->num_tets());
     if (method == "stuffing" && def.grading > 0)
       out += fmt::format("grading      {:g} ({} tets before)\n", def.grading, report.tets_before_grading);
+    if (method == "stuffing" && def.sharpen)
+      out += fmt::format("sharpened    {} boundary node moves onto creases and corners\n", report.sharpened);
     out += fmt::format("boundary     {} triangles, {} component(s)\n", boundary.triangles.size(), components);
     out += fmt::format("dihedral     {:.2f} .. {:.2f} deg\n", q.min_dihedral_deg, q.max_dihedral_deg);
     out += fmt::format("aspect       {:.3f} .. {:.3f} (mean {:.3f})\n", q.min_aspect, q.max_aspect, q.mean_aspect);
