@@ -163,6 +163,7 @@ int run_mesh(const MeshArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   StuffingReport report;
   std::optional<double> exact;  // exact volume from a structured mesher
+  RevolveReport rr;
   Result<TetMesh> mesh = make_error("no mesh");
   if (method == "box-csg") {
     BoxCsgReport br;
@@ -170,7 +171,6 @@ int run_mesh(const MeshArgs& a) {
     report.edge_length = br.edge_length;
     exact = br.exact_volume;
   } else if (method == "revolve") {
-    RevolveReport rr;
     mesh = mesh_revolution(sdf, {.edge_length = def.edge_length, .target_tets = def.target_tets, .segments = a.segments},
                            &rr);
     report.edge_length = rr.edge_length;
@@ -225,6 +225,10 @@ int run_mesh(const MeshArgs& a) {
       j["reference_kind"] = reference_kind;
       j["volume_error"] = (q.volume - *reference) / *reference;
     }
+    if (method == "revolve") {
+      j["segments"] = rr.segments;
+      j["angular_levels"] = rr.levels;
+    }
     j["lattice_vertices"] = report.lattice_vertices;
     j["warped"] = report.warped;
     if (method == "stuffing") j["sharpened"] = report.sharpened;
@@ -239,6 +243,8 @@ int run_mesh(const MeshArgs& a) {
     out += fmt::format("shape        {}\n", name);
     out += fmt::format("method       {}\n", method);
     out += fmt::format("edge length  {:.6g} m\n", report.edge_length);
+    if (method == "revolve")
+      out += fmt::format("segments     {} at the largest radius, {} angular level(s) below\n", rr.segments, rr.levels);
     out += fmt::format("nodes        {}\n", mesh->num_nodes());
     out += fmt::format("tets         {}\n", mesh->num_tets());
     if (method == "stuffing" && def.grading > 0)

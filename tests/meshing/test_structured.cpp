@@ -176,6 +176,24 @@ TEST(Revolve, CylinderOnTheAxisIsTheExactPrism) {
   }
 }
 
+// A bowl: a disc base on the axis and a thin wall out to a wide rim. With every profile point at
+// the rim's segment count the tets near the axis are thin around it (6 degrees); fewer segments
+// toward the axis (angular levels) keep them fat. The mesh stays conforming (closed 2-manifold
+// boundary) and the volume stays that of the chordal polygon's sweep (within 1 % of Pappus).
+TEST(Revolve, AngularLevelsKeepTetsNearTheAxisFat) {
+  const Sdf bowl = Sdf::revolution({{0.0, 0.0}, {0.04, 0.0}, {0.04, 0.008}, {0.07, 0.022}, {0.095, 0.048}, {0.108, 0.08},
+                                    {0.098, 0.08}, {0.086, 0.052}, {0.064, 0.03}, {0.036, 0.018}, {0.0, 0.018}});
+  RevolveReport rep;
+  auto m = mesh_revolution(bowl, {.target_tets = 3000}, &rep);
+  ASSERT_OK(m);
+  check_valid(*m, 2);
+  const QualitySummary q = mesh_quality(*m);
+  EXPECT_GT(q.min_dihedral_deg, 10.0);
+  const double exact = *bowl.analytic_volume();
+  EXPECT_NEAR(total_volume(*m), exact, 0.01 * exact);
+  EXPECT_NEAR(static_cast<double>(m->num_tets()), 3000.0, 600.0);
+}
+
 TEST(Revolve, VolumeConvergesToPappus) {
   // A thin-walled cup (base disc on the axis, 6 mm wall) and a ring away from the axis (a torus).
   const std::vector<Vec2> cup{{0, 0}, {0.05, 0}, {0.06, 0.1}, {0.054, 0.1}, {0.044, 0.006}, {0, 0.006}};

@@ -3,11 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <string>
 #include <utility>
 
+#include "shatter/mesh/quality.h"
 #include "shatter/mesh/validate.h"
 
 namespace shatter {
@@ -56,18 +58,272 @@ struct Sweep {
   std::vector<Vec2> points;
   std::vector<std::array<Index, 3>> triangles;
   int segments = 0;
+  std::vector<int> level;  // angular level per point (segments >> level around the axis)
+  // Tet count: exact for triangles swept at one level, estimated for the two-level polytopes.
   [[nodiscard]] std::int64_t tets() const {
     std::int64_t t = 0;
     for (const auto& tri : triangles) {
-      int k = 0;
-      for (Index v : tri) k += points[v].x() == 0 ? 1 : 0;
-      t += 3 - k;
+      int axis = 0, kmin = 1 << 20, kmax = 0;
+      for (Index v : tri) {
+        if (points[v].x() == 0) {
+          ++axis;
+          continue;
+        }
+        const int k = level.empty() ? 0 : level[static_cast<std::size_t>(v)];
+        kmin = std::min(kmin, k);
+        kmax = std::max(kmax, k);
+      }
+      const std::int64_t steps = segments >> kmin;
+      if (kmax == kmin) {
+        t += steps * (3 - axis);
+        continue;
+      }
+      // Two-level polytope: its boundary triangles less about 4 at the joined vertex.
+      int tris = 2;
+      for (int e = 0; e < 3; ++e) {
+        const Index p = tri[static_cast<std::size_t>(e)], q = tri[static_cast<std::size_t>((e + 1) % 3)];
+        const bool pa = points[p].x() == 0, qa = points[q].x() == 0;
+        if (pa && qa) continue;
+        const bool pf = !pa && level[static_cast<std::size_t>(p)] == kmin, qf = !qa && level[static_cast<std::size_t>(q)] == kmin;
+        if (pa || qa) tris += (pa ? qf : pf) ? 2 : 1;
+        else if (pf && qf) tris += 4;
+        else if (!pf && !qf) tris += 2;
+        else tris += 3;
+      }
+      t += steps / 2 * (tris - 4);
     }
-    return t * segments;
+    return t;
   }
 };
 
-Result<Sweep> plan(const std::vector<Vec2>& profile, double h, const RevolveDef& def) {
+// Angular levels: a profile point at level k is swept with N / 2^k segments, so that the spacing
+// around the axis (2 pi r / segments) stays near h instead of shrinking toward the axis. Levels of
+// the two ends of a profile edge differ by at most 1. Returns the levels (axis points: 0, unused)
+// and the largest level L; N must be a multiple of 2^L.
+std::vector<int> angular_levels(const Sweep& s, double h, int max_level, int min_segments) {
+  const Index np = static_cast<Index>(s.points.size());
+  std::vector<int> level(static_cast<std::size_t>(np), 0);
+  for (Index i = 0; i < np; ++i) {
+    const double r = s.points[static_cast<std::size_t>(i)].x();
+    if (r == 0) continue;
+    const double want = std::max<double>(min_segments, 2.0 * std::numbers::pi * r / h);
+    int k = 0;
+    while (k < max_level && static_cast<double>(s.segments >> (k + 1)) >= want && (s.segments >> (k + 1)) >= min_segments) ++k;
+    level[static_cast<std::size_t>(i)] = k;
+  }
+  // Neighbouring off-axis points differ by at most one level: lower (refine) the coarser one.
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (const auto& t : s.triangles)
+      for (int e = 0; e < 3; ++e) {
+        const Index u = t[static_cast<std::size_t>(e)], v = t[static_cast<std::size_t>((e + 1) % 3)];
+        if (s.points[static_cast<std::size_t>(u)].x() == 0 || s.points[static_cast<std::size_t>(v)].x() == 0) continue;
+        int& ku = level[static_cast<std::size_t>(u)];
+        int& kv = level[static_cast<std::size_t>(v)];
+        if (ku > kv + 1) { ku = kv + 1; changed = true; }
+        if (kv > ku + 1) { kv = ku + 1; changed = true; }
+      }
+  }
+  return level;
+}
+
+// Sweep with angular levels (see angular_levels). A profile triangle whose off-axis points share
+// one level k is swept in prisms of N / 2^k segments, as the plain sweep does. One with points at
+// levels k and k + 1 is swept two fine steps at a time: the polytope between the two end triangles
+// has the fine points' middle ring as extra vertices; its faces on a profile edge are split by a
+// rule of that edge alone (quadrilaterals through their lowest node; a fine/coarse strip as
+// (p0 p1 q0), (p1 p2 q2), (p1 q2 q0)), and it is filled by joining the vertex that gives the best
+// worst tet, among those that see every face from inside, to the faces. Returns false when some
+// polytope has no such vertex.
+bool sweep_with_levels(const Sweep& s, const std::vector<int>& level, TetMesh& m, std::vector<Index>& base) {
+  const Index np = static_cast<Index>(s.points.size());
+  const int n = s.segments;
+  base.assign(static_cast<std::size_t>(np), -1);
+  auto on_axis = [&](Index i) { return s.points[static_cast<std::size_t>(i)].x() == 0; };
+  for (Index i = 0; i < np; ++i)
+    if (on_axis(i)) {
+      base[static_cast<std::size_t>(i)] = m.num_nodes();
+      m.positions.emplace_back(0.0, s.points[static_cast<std::size_t>(i)].y(), 0.0);
+    }
+  for (Index i = 0; i < np; ++i)
+    if (!on_axis(i)) {
+      base[static_cast<std::size_t>(i)] = m.num_nodes();
+      const int count = n >> level[static_cast<std::size_t>(i)];
+      for (int k = 0; k < count; ++k) {
+        const double th = 2.0 * std::numbers::pi * static_cast<double>(k) / static_cast<double>(count);
+        const double c = k == 0 ? 1.0 : std::cos(th), sn = k == 0 ? 0.0 : std::sin(th);
+        const Vec2& q = s.points[static_cast<std::size_t>(i)];
+        m.positions.emplace_back(q.x() * c, q.y(), -q.x() * sn);
+      }
+    }
+  // Node of point i at fine angle index J (a multiple of 2^level(i)).
+  auto node = [&](Index i, int J) -> Index {
+    if (on_axis(i)) return base[static_cast<std::size_t>(i)];
+    const int k = level[static_cast<std::size_t>(i)];
+    const int count = n >> k;
+    return base[static_cast<std::size_t>(i)] + ((J >> k) % count);
+  };
+  using Tri = std::array<Index, 3>;
+  auto quad = [](std::vector<Tri>& f, Index a, Index b, Index c, Index d) {  // a b c d in cycle order
+    const std::array<Index, 4> q{a, b, c, d};
+    const int j = static_cast<int>(std::min_element(q.begin(), q.end()) - q.begin());
+    f.push_back({q[static_cast<std::size_t>(j)], q[static_cast<std::size_t>((j + 1) % 4)], q[static_cast<std::size_t>((j + 2) % 4)]});
+    f.push_back({q[static_cast<std::size_t>(j)], q[static_cast<std::size_t>((j + 2) % 4)], q[static_cast<std::size_t>((j + 3) % 4)]});
+  };
+  for (const auto& tri : s.triangles) {
+    int kmin = 1 << 20;
+    for (Index v : tri)
+      if (!on_axis(v)) kmin = std::min(kmin, level[static_cast<std::size_t>(v)]);
+    const int step = 1 << kmin;
+    bool mixed = false;
+    for (Index v : tri) mixed |= !on_axis(v) && level[static_cast<std::size_t>(v)] > kmin;
+    if (!mixed) {
+      for (int J = 0; J < n; J += step) {  // prisms, as in the plain sweep
+        std::array<Index, 6> v{};
+        for (int c = 0; c < 3; ++c) {
+          v[static_cast<std::size_t>(c)] = node(tri[static_cast<std::size_t>(c)], J);
+          v[static_cast<std::size_t>(c + 3)] = node(tri[static_cast<std::size_t>(c)], J + step);
+        }
+        const int m0 = static_cast<int>(std::min_element(v.begin(), v.end()) - v.begin());
+        const int col = m0 % 3, lev = m0 / 3;
+        const Index apex = v[static_cast<std::size_t>(m0)];
+        const int c1 = (col + 1) % 3, c2 = (col + 2) % 3;
+        std::vector<Tri> faces;
+        quad(faces, v[static_cast<std::size_t>(c1)], v[static_cast<std::size_t>(c2)], v[static_cast<std::size_t>(c2 + 3)], v[static_cast<std::size_t>(c1 + 3)]);
+        faces.push_back({v[static_cast<std::size_t>(3 * (1 - lev))], v[static_cast<std::size_t>(3 * (1 - lev) + 1)], v[static_cast<std::size_t>(3 * (1 - lev) + 2)]});
+        for (const auto& f : faces) {
+          TetIndices t{apex, f[0], f[1], f[2]};
+          if (t[0] == t[1] || t[0] == t[2] || t[0] == t[3] || t[1] == t[2] || t[1] == t[3] || t[2] == t[3]) continue;
+          m.tets.push_back(t);
+        }
+      }
+      continue;
+    }
+    for (int J = 0; J < n; J += 2 * step) {
+      const int J1 = J + step, J2 = J + 2 * step;
+      // Faces as polygons: a quadrilateral swept by a profile edge is planar (an isosceles
+      // trapezoid), so a vertex on it must not be joined to it; it is split through its lowest node.
+      std::vector<std::vector<Index>> faces;
+      faces.push_back({node(tri[0], J), node(tri[1], J), node(tri[2], J)});
+      faces.push_back({node(tri[0], J2), node(tri[1], J2), node(tri[2], J2)});
+      for (int e = 0; e < 3; ++e) {
+        Index p = tri[static_cast<std::size_t>(e)], q = tri[static_cast<std::size_t>((e + 1) % 3)];
+        const bool pa = on_axis(p), qa = on_axis(q);
+        if (pa && qa) continue;
+        const bool pf = !pa && level[static_cast<std::size_t>(p)] == kmin, qf = !qa && level[static_cast<std::size_t>(q)] == kmin;
+        if (pa || qa) {  // fan from the axis point over the other point's ring
+          const Index ax = pa ? node(p, 0) : node(q, 0);
+          const Index o = pa ? q : p;
+          const bool of = pa ? qf : pf;
+          if (of) {
+            faces.push_back({ax, node(o, J), node(o, J1)});
+            faces.push_back({ax, node(o, J1), node(o, J2)});
+          } else {
+            faces.push_back({ax, node(o, J), node(o, J2)});
+          }
+        } else if (pf && qf) {
+          faces.push_back({node(p, J), node(q, J), node(q, J1), node(p, J1)});
+          faces.push_back({node(p, J1), node(q, J1), node(q, J2), node(p, J2)});
+        } else if (!pf && !qf) {
+          faces.push_back({node(p, J), node(q, J), node(q, J2), node(p, J2)});
+        } else {
+          if (!pf) std::swap(p, q);  // p fine, q coarse
+          faces.push_back({node(p, J), node(p, J1), node(q, J)});
+          faces.push_back({node(p, J1), node(p, J2), node(q, J2)});
+          faces.push_back({node(p, J1), node(q, J2), node(q, J)});
+        }
+      }
+      std::vector<Index> verts;
+      for (const auto& f : faces) verts.insert(verts.end(), f.begin(), f.end());
+      std::sort(verts.begin(), verts.end());
+      verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+      Vec3 centre = Vec3::Zero();
+      for (Index v : verts) centre += m.positions[static_cast<std::size_t>(v)];
+      centre /= static_cast<double>(verts.size());
+      // Triangles of each face, oriented outward (away from the polytope's centre).
+      std::vector<std::vector<Tri>> face_tris;
+      for (const auto& f : faces) {
+        std::vector<Tri> t;
+        if (f.size() == 3) t.push_back({f[0], f[1], f[2]});
+        else quad(t, f[0], f[1], f[2], f[3]);
+        for (auto& x : t) {
+          const Vec3 a = m.positions[static_cast<std::size_t>(x[0])], b = m.positions[static_cast<std::size_t>(x[1])],
+                     c = m.positions[static_cast<std::size_t>(x[2])];
+          if ((b - a).cross(c - a).dot(a - centre) < 0) std::swap(x[1], x[2]);
+        }
+        face_tris.push_back(std::move(t));
+      }
+      double best = -1;
+      std::vector<TetIndices> best_tets;
+      for (Index apex : verts) {
+        std::vector<TetIndices> tets;
+        double worst = std::numeric_limits<double>::infinity();
+        bool ok = true;
+        const Vec3 x0 = m.positions[static_cast<std::size_t>(apex)];
+        for (std::size_t fi = 0; fi < faces.size() && ok; ++fi) {
+          const auto& f4 = faces[fi];
+          if (std::find(f4.begin(), f4.end(), apex) != f4.end()) {
+            // A quadrilateral holding the apex keeps its split only if the diagonal ends there.
+            if (f4.size() == 4) {
+              const int j = static_cast<int>(std::min_element(f4.begin(), f4.end()) - f4.begin());
+              if (apex != f4[static_cast<std::size_t>(j)] && apex != f4[static_cast<std::size_t>((j + 2) % 4)]) ok = false;
+            }
+            continue;
+          }
+          for (const Tri& f : face_tris[fi]) {
+            const Vec3 a = m.positions[static_cast<std::size_t>(f[0])], b = m.positions[static_cast<std::size_t>(f[1])],
+                       c = m.positions[static_cast<std::size_t>(f[2])];
+            const double vol = signed_volume(x0, a, b, c);
+            const double l2 = (a - x0).squaredNorm() + (b - x0).squaredNorm() + (c - x0).squaredNorm() + (b - a).squaredNorm() +
+                              (c - b).squaredNorm() + (a - c).squaredNorm();
+            const double q = vol / (l2 * std::sqrt(l2));
+            if (!(q > 1e-6)) {
+              ok = false;
+              break;
+            }
+            worst = std::min(worst, q);
+            tets.push_back({apex, f[0], f[1], f[2]});
+          }
+        }
+        if (ok && worst > best) {
+          best = worst;
+          best_tets = std::move(tets);
+        }
+      }
+      // A new node at the centre of the middle cross-section (fine points at J1, coarse chords'
+      // midpoints), joined to every boundary triangle: taken when no vertex sees every face while
+      // keeping the shared splits, or when it gives the better worst tet.
+      Vec3 mid = Vec3::Zero();
+      for (Index v : tri) {
+        if (on_axis(v) || level[static_cast<std::size_t>(v)] == kmin) mid += m.positions[static_cast<std::size_t>(node(v, J1))];
+        else mid += 0.5 * (m.positions[static_cast<std::size_t>(node(v, J))] + m.positions[static_cast<std::size_t>(node(v, J2))]);
+      }
+      mid /= 3.0;
+      double mid_worst = std::numeric_limits<double>::infinity();
+      for (const auto& ft : face_tris)
+        for (const Tri& f : ft) {
+          const Vec3 a = m.positions[static_cast<std::size_t>(f[0])], b = m.positions[static_cast<std::size_t>(f[1])],
+                     c = m.positions[static_cast<std::size_t>(f[2])];
+          const double vol = signed_volume(mid, a, b, c);
+          const double l2 = (a - mid).squaredNorm() + (b - mid).squaredNorm() + (c - mid).squaredNorm() + (b - a).squaredNorm() +
+                            (c - b).squaredNorm() + (a - c).squaredNorm();
+          mid_worst = std::min(mid_worst, vol / (l2 * std::sqrt(l2)));
+        }
+      if (mid_worst > 1e-6 && mid_worst > best) {
+        const Index c = m.num_nodes();
+        m.positions.push_back(mid);
+        best_tets.clear();
+        for (const auto& ft : face_tris)
+          for (const Tri& f : ft) best_tets.push_back({c, f[0], f[1], f[2]});
+      }
+      if (best_tets.empty()) return false;
+      m.tets.insert(m.tets.end(), best_tets.begin(), best_tets.end());
+    }
+  }
+  return true;
+}
+
+Result<Sweep> plan(const std::vector<Vec2>& profile, double h, const RevolveDef& def, bool levels) {
   Sweep s;
   s.points = resample(profile, h);
   auto tris = triangulate_polygon(s.points);
@@ -78,6 +334,19 @@ Result<Sweep> plan(const std::vector<Vec2>& profile, double h, const RevolveDef&
   s.segments = def.segments > 0
                    ? def.segments
                    : std::max(def.min_segments, static_cast<int>(std::lround(2.0 * std::numbers::pi * rmax / h)));
+  // Angular levels up to L = log2(r_max / r_min) (at most 4): with automatic segments N is
+  // rounded up to a multiple of 2^L; a given N allows as many levels as it has factors of 2.
+  double rmin = rmax;
+  for (const Vec2& p : s.points)
+    if (p.x() > 0) rmin = std::min(rmin, p.x());
+  int L = 0;
+  while (levels && L < 4 && rmax / rmin >= static_cast<double>(2 << L)) ++L;
+  if (def.segments > 0) {
+    while (L > 0 && (s.segments % (1 << L)) != 0) --L;
+  } else {
+    s.segments = (s.segments + (1 << L) - 1) / (1 << L) * (1 << L);
+  }
+  s.level = angular_levels(s, h, L, def.min_segments);
   return s;
 }
 
@@ -192,88 +461,69 @@ Result<TetMesh> mesh_revolution(const Sdf& sdf, const RevolveDef& def, RevolveRe
     return field_error("edge_length", "expected an edge length > 0 m or a tet count > 0");
   if (def.segments < 0 || def.min_segments < 3) return field_error("segments", "expected at least 3 segments");
 
-  double h = def.edge_length;
-  if (!(h > 0)) {
-    // Scan h downwards in 2 % steps from the profile's size; keep the count closest to the target.
-    Aabb b = sdf.bounds();
-    double hi = b.extent().maxCoeff() / shape->transform.scale;
-    std::int64_t best = -1;
-    for (double t = hi; t > hi * 1e-4; t *= 0.98) {
-      auto s = plan(shape->profile, t, def);
-      if (!s) return std::move(s.error());
-      const std::int64_t c = s->tets();
-      if (best < 0 || std::llabs(c - def.target_tets) < std::llabs(best - def.target_tets)) {
-        best = c;
-        h = t;
-      }
-      if (c > 3 * def.target_tets) break;
-    }
-  }
-  auto planned = plan(shape->profile, h, def);
-  if (!planned) return std::move(planned.error());
-  const Sweep& s = *planned;
-  const Index np = static_cast<Index>(s.points.size());
-  const Index nseg = s.segments;
-
-  // Nodes: axis vertices first (so they are the lowest vertex of every prism they touch).
-  std::vector<Index> base(np, -1);
-  TetMesh m;
-  for (Index i = 0; i < np; ++i)
-    if (s.points[i].x() == 0) {
-      base[i] = m.num_nodes();
-      m.positions.emplace_back(0.0, s.points[i].y(), 0.0);
-    }
-  std::vector<double> cs(nseg), sn(nseg);
-  for (Index k = 0; k < nseg; ++k) {
-    const double th = 2.0 * std::numbers::pi * static_cast<double>(k) / static_cast<double>(nseg);
-    cs[k] = k == 0 ? 1.0 : std::cos(th);
-    sn[k] = k == 0 ? 0.0 : std::sin(th);
-  }
-  for (Index i = 0; i < np; ++i)
-    if (s.points[i].x() != 0) {
-      base[i] = m.num_nodes();
-      for (Index k = 0; k < nseg; ++k)
-        m.positions.emplace_back(s.points[i].x() * cs[k], s.points[i].y(), -s.points[i].x() * sn[k]);
-    }
-  auto node = [&](Index i, Index k) { return s.points[i].x() == 0 ? base[i] : base[i] + k % nseg; };
-
-  for (Index k = 0; k < nseg; ++k)
-    for (const auto& tri : s.triangles) {
-      std::array<Index, 6> v{};  // bottom 0..2 at segment k, top 3..5 at k + 1
-      for (int c = 0; c < 3; ++c) {
-        v[c] = node(tri[c], k);
-        v[c + 3] = node(tri[c], k + 1);
-      }
-      const int m0 = static_cast<int>(std::min_element(v.begin(), v.end()) - v.begin());
-      const int col = m0 % 3, level = m0 / 3;
-      const Index apex = v[m0];
-      const int c1 = (col + 1) % 3, c2 = (col + 2) % 3;
-      const std::array<Index, 4> quad{v[c1], v[c2], v[c2 + 3], v[c1 + 3]};
-      const int j = static_cast<int>(std::min_element(quad.begin(), quad.end()) - quad.begin());
-      const std::array<std::array<Index, 3>, 3> faces{{
-          {quad[j], quad[(j + 1) % 4], quad[(j + 2) % 4]},
-          {quad[j], quad[(j + 2) % 4], quad[(j + 3) % 4]},
-          {v[3 * (1 - level)], v[3 * (1 - level) + 1], v[3 * (1 - level) + 2]},
-      }};
-      for (const auto& f : faces) {
-        TetIndices t{apex, f[0], f[1], f[2]};
-        if (t[0] == t[1] || t[0] == t[2] || t[0] == t[3] || t[1] == t[2] || t[1] == t[3] || t[2] == t[3]) continue;
-        m.tets.push_back(t);
-      }
-    }
+  // Two sweeps: plain (every profile point at N segments) and with angular levels (fewer segments
+  // toward the axis, two-level polytopes between); each sized for the target on its own, and the
+  // one with the larger smallest dihedral angle kept (the plain one on a tie).
   const Sdf::Transform& xf = shape->transform;
-  for (Vec3& p : m.positions) p = xf.translation + xf.rotation * (xf.scale * p);
-  for (TetIndices& t : m.tets)
-    if (signed_volume(m.positions[t[0]], m.positions[t[1]], m.positions[t[2]], m.positions[t[3]]) < 0)
-      std::swap(t[2], t[3]);
+  struct Candidate {
+    TetMesh mesh;
+    double h = 0, min_angle = -1;
+    int segments = 0, levels = 0;
+    Index points = 0, triangles = 0;
+  };
+  auto build = [&](bool levels) -> Result<Candidate> {
+    double h = def.edge_length;
+    if (!(h > 0)) {
+      // Scan h downwards in 2 % steps from the profile's size; keep the count closest to the target.
+      Aabb b = sdf.bounds();
+      double hi = b.extent().maxCoeff() / shape->transform.scale;
+      std::int64_t best = -1;
+      for (double t = hi; t > hi * 1e-4; t *= 0.98) {
+        auto sw = plan(shape->profile, t, def, levels);
+        if (!sw) return std::move(sw.error());
+        const std::int64_t c = sw->tets();
+        if (best < 0 || std::llabs(c - def.target_tets) < std::llabs(best - def.target_tets)) {
+          best = c;
+          h = t;
+        }
+        if (c > 3 * def.target_tets) break;
+      }
+    }
+    auto planned = plan(shape->profile, h, def, levels);
+    if (!planned) return std::move(planned.error());
+    const Sweep& sw = *planned;
+    Candidate c;
+    c.h = h;
+    c.segments = sw.segments;
+    for (int k : sw.level) c.levels = std::max(c.levels, k);
+    c.points = static_cast<Index>(sw.points.size());
+    c.triangles = static_cast<Index>(sw.triangles.size());
+    std::vector<Index> base;
+    if (!sweep_with_levels(sw, sw.level, c.mesh, base)) return make_error("revolve mesher: a two-level polytope could not be filled");
+    TetMesh& m = c.mesh;
+    for (Vec3& p : m.positions) p = xf.translation + xf.rotation * (xf.scale * p);
+    for (TetIndices& t : m.tets)
+      if (signed_volume(m.positions[t[0]], m.positions[t[1]], m.positions[t[2]], m.positions[t[3]]) < 0) std::swap(t[2], t[3]);
+    c.min_angle = mesh_quality(m).min_dihedral_deg;
+    return c;
+  };
+  auto plain = build(false);
+  if (!plain) return std::move(plain.error());
+  Candidate chosen = std::move(*plain);
+  if (auto graded = build(true); graded && graded->min_angle > chosen.min_angle) chosen = std::move(*graded);
+  TetMesh m = std::move(chosen.mesh);
+  const double h = chosen.h;
+  const Index np = chosen.points;
+  const Index nseg = chosen.segments;
   const ValidationReport v = validate_mesh(m);
   if (v.has_errors())
     return make_error("revolve mesher: invalid mesh (" + (v.problems.empty() ? std::string() : v.problems[0].message) + ")");
   if (report) {
     report->edge_length = h;
     report->segments = static_cast<int>(nseg);
+    report->levels = chosen.levels;
     report->profile_points = np;
-    report->triangles = static_cast<std::int64_t>(s.triangles.size());
+    report->triangles = chosen.triangles;
     const double s3 = xf.scale * xf.scale * xf.scale;
     report->exact_volume = Sdf::revolution(shape->profile).analytic_volume().value_or(0.0) * s3;
   }

@@ -8,6 +8,14 @@
 // always conform. Profile vertices on the axis (r = 0) are one node shared by all segments, which
 // turns the prisms touching the axis into a pyramid (2 tets) or a tet; axis nodes are numbered
 // first so they are always the lowest vertex of their prism.
+//
+// Angular levels: a second sweep gives each profile point N / 2^k segments, k growing toward the
+// axis so the spacing around it stays near the edge length (levels of neighbouring points differ
+// by at most one). A triangle whose points are at two levels is swept two fine steps at a time; the
+// polytope between its end triangles is filled by joining its faces (split by a rule of each face
+// alone, so neighbours conform) to the vertex, or to a new node at the centre of its middle
+// cross-section, that gives the best worst tet. The sweep with the larger smallest dihedral angle
+// is returned.
 #pragma once
 
 #include <cstdint>
@@ -40,7 +48,8 @@ struct RevolveDef {
 
 struct RevolveReport {
   double edge_length = 0;          ///< m
-  int segments = 0;                ///< angular segments N
+  int segments = 0;                ///< angular segments N (at the largest radius)
+  int levels = 0;                  ///< angular levels used: down to N / 2^levels near the axis
   std::int64_t profile_points = 0; ///< resampled profile vertices
   std::int64_t triangles = 0;      ///< profile triangles
   double exact_volume = 0;         ///< Pappus volume of the profile (after the transform), m^3
