@@ -16,38 +16,12 @@
 namespace shatter {
 namespace {
 
-// Closed, consistently oriented 2-manifold boundary with no pinched vertices; returns V - E + F.
-int closed_manifold_euler(const TriSurface& s) {
-  std::map<std::pair<Index, Index>, int> edges;
-  for (const TriIndices& t : s.triangles)
-    for (int k = 0; k < 3; ++k) ++edges[{t[k], t[(k + 1) % 3]}];
-  for (const auto& [e, n] : edges) {
-    EXPECT_EQ(n, 1) << "edge " << e.first << "-" << e.second;
-    EXPECT_EQ(edges.count({e.second, e.first}), 1u) << "open edge " << e.first << "-" << e.second;
-  }
-  std::map<Index, std::map<Index, Index>> fan;
-  for (const TriIndices& t : s.triangles)
-    for (int k = 0; k < 3; ++k) fan[t[k]][t[(k + 1) % 3]] = t[(k + 2) % 3];
-  for (const auto& [v, ring] : fan) {
-    const Index start = ring.begin()->first;
-    Index cur = start;
-    std::size_t steps = 0;
-    do {
-      cur = ring.at(cur);
-      ++steps;
-    } while (cur != start && steps <= ring.size());
-    EXPECT_EQ(steps, ring.size()) << "pinched vertex " << v;
-  }
-  return static_cast<int>(s.positions.size()) - static_cast<int>(edges.size() / 2) +
-         static_cast<int>(s.triangles.size());
-}
-
 void check_valid(const TetMesh& m, int euler) {
   ASSERT_GT(m.num_tets(), 0);
   for (Index e = 0; e < m.num_tets(); ++e) ASSERT_GT(signed_volume(m, e), 0.0) << "tet " << e;
   const ValidationReport vr = validate_mesh(m);
   EXPECT_TRUE(vr.problems.empty()) << vr.problems.front().message;
-  EXPECT_EQ(closed_manifold_euler(boundary_surface(m)), euler);
+  EXPECT_EQ(test::closed_manifold_euler(boundary_surface(m)), euler);
   EXPECT_EQ(connected_components(m).count, 1);
 }
 

@@ -34,33 +34,6 @@ std::uint64_t mesh_hash(const TetMesh& m) {
   return h.digest();
 }
 
-// Closed, consistently oriented 2-manifold: every directed edge once and its reverse once, and
-// every boundary vertex's triangles form one fan (no pinched vertices). Returns V - E + F.
-int check_closed_manifold(const TriSurface& s) {
-  std::map<std::pair<Index, Index>, int> edges;
-  for (const TriIndices& t : s.triangles)
-    for (int k = 0; k < 3; ++k) ++edges[{t[k], t[(k + 1) % 3]}];
-  for (const auto& [e, n] : edges) {
-    EXPECT_EQ(n, 1) << "edge " << e.first << "-" << e.second;
-    EXPECT_EQ(edges.count({e.second, e.first}), 1u) << "open edge " << e.first << "-" << e.second;
-  }
-  // Vertex fans: walk around each vertex through its triangles' next edges.
-  std::map<Index, std::map<Index, Index>> fan;  // vertex -> (next vertex -> previous vertex)
-  for (const TriIndices& t : s.triangles)
-    for (int k = 0; k < 3; ++k) fan[t[k]][t[(k + 1) % 3]] = t[(k + 2) % 3];
-  for (const auto& [v, ring] : fan) {
-    Index start = ring.begin()->first, cur = start;
-    std::size_t steps = 0;
-    do {
-      cur = ring.at(cur);
-      ++steps;
-    } while (cur != start && steps <= ring.size());
-    EXPECT_EQ(steps, ring.size()) << "pinched vertex " << v;
-  }
-  return static_cast<int>(s.positions.size()) - static_cast<int>(edges.size() / 2) +
-         static_cast<int>(s.triangles.size());
-}
-
 void check_mesh(const TetMesh& m, int expected_euler) {
   for (Index e = 0; e < m.num_tets(); ++e) ASSERT_GT(signed_volume(m, e), 0.0) << "tet " << e;
   const ValidationReport vr = validate_mesh(m);
@@ -68,7 +41,7 @@ void check_mesh(const TetMesh& m, int expected_euler) {
   const QualitySummary q = mesh_quality(m);
   EXPECT_GE(q.min_dihedral_deg, kMinDihedralDeg);
   EXPECT_LE(q.max_dihedral_deg, kMaxDihedralDeg);
-  EXPECT_EQ(check_closed_manifold(boundary_surface(m)), expected_euler);
+  EXPECT_EQ(test::closed_manifold_euler(boundary_surface(m)), expected_euler);
 }
 
 struct Case {

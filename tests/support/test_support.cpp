@@ -1,6 +1,7 @@
 #include "support/test_support.h"
 
 #include <array>
+#include <map>
 #include <cstdio>
 #include <mutex>
 #include <sys/wait.h>
@@ -67,5 +68,30 @@ CommandResult run_command(const std::string& command, bool merge_stderr) {
 }
 
 std::string cli_path() { return SHATTER_CLI_PATH; }
+
+int closed_manifold_euler(const TriSurface& s) {
+  std::map<std::pair<Index, Index>, int> edges;
+  for (const TriIndices& t : s.triangles)
+    for (int k = 0; k < 3; ++k) ++edges[{t[k], t[(k + 1) % 3]}];
+  for (const auto& [e, n] : edges) {
+    EXPECT_EQ(n, 1) << "edge " << e.first << "-" << e.second;
+    EXPECT_EQ(edges.count({e.second, e.first}), 1u) << "open edge " << e.first << "-" << e.second;
+  }
+  // Vertex fans: walk around each vertex through its triangles' next edges.
+  std::map<Index, std::map<Index, Index>> fan;  // vertex -> (next vertex -> previous vertex)
+  for (const TriIndices& t : s.triangles)
+    for (int k = 0; k < 3; ++k) fan[t[k]][t[(k + 1) % 3]] = t[(k + 2) % 3];
+  for (const auto& [v, ring] : fan) {
+    const Index start = ring.begin()->first;
+    Index cur = start;
+    std::size_t steps = 0;
+    do {
+      cur = ring.at(cur);
+      ++steps;
+    } while (cur != start && steps <= ring.size());
+    EXPECT_EQ(steps, ring.size()) << "pinched vertex " << v;
+  }
+  return static_cast<int>(s.positions.size()) - static_cast<int>(edges.size() / 2) + static_cast<int>(s.triangles.size());
+}
 
 }  // namespace shatter::test

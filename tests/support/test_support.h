@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "shatter/core/error.h"
+#include "shatter/mesh/topology.h"
 
 namespace shatter::test {
 
@@ -38,6 +39,11 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+/// Checks (with EXPECTs) that s is a closed, consistently oriented 2-manifold: every directed edge
+/// once and its reverse once, every vertex's triangles one fan (no pinched vertex). Returns its
+/// Euler characteristic V - E + F (2 for a sphere, 0 for a torus).
+int closed_manifold_euler(const TriSurface& s);
 
 /// Path of a file under tests/data.
 std::string data_path(const std::string& relative);
