@@ -35,6 +35,12 @@ std::array<double, 6> dihedral_angles(const Mat34& x) {
   return out;
 }
 
+double signed_shape_measure(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const double l2 = (b - a).squaredNorm() + (c - a).squaredNorm() + (d - a).squaredNorm() + (c - b).squaredNorm() +
+                    (d - b).squaredNorm() + (d - c).squaredNorm();
+  return signed_volume(a, b, c, d) / (l2 * std::sqrt(l2));
+}
+
 double aspect_ratio(const Mat34& x) {
   const Vec3 a = x.col(1) - x.col(0), b = x.col(2) - x.col(0), c = x.col(3) - x.col(0);
   const double six_v = std::abs(a.dot(b.cross(c)));

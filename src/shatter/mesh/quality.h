@@ -13,6 +13,10 @@ std::array<double, 6> dihedral_angles(const Mat34& x);
 /// a degenerate face.
 std::array<double, 6> dihedral_cosines(const Mat34& x);
 
+/// Shape measure of the tet (a, b, c, d): signed volume / (sum of squared edge lengths)^(3/2);
+/// 0 when flat, negative when inverted, largest for the regular tet. Cheap (no roots but one).
+double signed_shape_measure(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
+
 /// Aspect ratio = circumradius / (3 * inradius): 1 for the regular tet, larger is worse,
 /// +inf for a degenerate tet.
 double aspect_ratio(const Mat34& x);

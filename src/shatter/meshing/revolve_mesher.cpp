@@ -273,10 +273,7 @@ bool sweep_with_levels(const Sweep& s, const std::vector<int>& level, TetMesh& m
           for (const Tri& f : face_tris[fi]) {
             const Vec3 a = m.positions[static_cast<std::size_t>(f[0])], b = m.positions[static_cast<std::size_t>(f[1])],
                        c = m.positions[static_cast<std::size_t>(f[2])];
-            const double vol = signed_volume(x0, a, b, c);
-            const double l2 = (a - x0).squaredNorm() + (b - x0).squaredNorm() + (c - x0).squaredNorm() + (b - a).squaredNorm() +
-                              (c - b).squaredNorm() + (a - c).squaredNorm();
-            const double q = vol / (l2 * std::sqrt(l2));
+            const double q = signed_shape_measure(x0, a, b, c);
             if (!(q > 1e-6)) {
               ok = false;
               break;
@@ -304,10 +301,7 @@ bool sweep_with_levels(const Sweep& s, const std::vector<int>& level, TetMesh& m
         for (const Tri& f : ft) {
           const Vec3 a = m.positions[static_cast<std::size_t>(f[0])], b = m.positions[static_cast<std::size_t>(f[1])],
                      c = m.positions[static_cast<std::size_t>(f[2])];
-          const double vol = signed_volume(mid, a, b, c);
-          const double l2 = (a - mid).squaredNorm() + (b - mid).squaredNorm() + (c - mid).squaredNorm() + (b - a).squaredNorm() +
-                            (c - b).squaredNorm() + (a - c).squaredNorm();
-          mid_worst = std::min(mid_worst, vol / (l2 * std::sqrt(l2)));
+          mid_worst = std::min(mid_worst, signed_shape_measure(mid, a, b, c));
         }
       if (mid_worst > 1e-6 && mid_worst > best) {
         const Index c = m.num_nodes();
@@ -510,6 +504,7 @@ Result<TetMesh> mesh_revolution(const Sdf& sdf, const RevolveDef& def, RevolveRe
   auto plain = build(false);
   if (!plain) return std::move(plain.error());
   Candidate chosen = std::move(*plain);
+  // A level sweep that cannot fill some polytope is dropped: the plain sweep stands (revolve_mesher.h).
   if (auto graded = build(true); graded && graded->min_angle > chosen.min_angle) chosen = std::move(*graded);
   TetMesh m = std::move(chosen.mesh);
   const double h = chosen.h;

@@ -15,7 +15,7 @@
 // polytope between its end triangles is filled by joining its faces (split by a rule of each face
 // alone, so neighbours conform) to the vertex, or to a new node at the centre of its middle
 // cross-section, that gives the best worst tet. The sweep with the larger smallest dihedral angle
-// is returned.
+// is returned; when some two-level polytope has no filling with positive tets, the plain sweep is.
 #pragma once
 
 #include <cstdint>

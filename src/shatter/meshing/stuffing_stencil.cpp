@@ -7,9 +7,11 @@
 // the opposite triangle, and the pyramid from it to the opposite quadrilateral.
 #include "shatter/meshing/stuffing_stencil.h"
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <limits>
+
+#include "shatter/mesh/quality.h"
 
 namespace shatter::stuffing {
 namespace {
@@ -33,14 +35,6 @@ int quad_pivot(const StencilInput& in, int a, int b, int p) {
   const int on_long = is_long_edge(a, p) ? a : b;
   const int on_short = on_long == a ? b : a;
   return in.pivot_on_short ? on_short : on_long;
-}
-
-// Shape measure |V| / (sum of squared edge lengths)^(3/2): 0 when flat, largest when regular.
-double shape(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-  const double l2 = (b - a).squaredNorm() + (c - a).squaredNorm() + (d - a).squaredNorm() + (c - b).squaredNorm() +
-                    (d - b).squaredNorm() + (d - c).squaredNorm();
-  const double v = (b - a).cross(c - a).dot(d - a) / 6.0;
-  return std::abs(v) / (l2 * std::sqrt(l2));
 }
 
 // Prism with triangles t0, t1 and rails t0[i]-t1[i]; quadrilateral i lies between rails i and
@@ -75,7 +69,7 @@ double worst_shape(const StencilInput& in, const StencilOutput& out) {
   double w = std::numeric_limits<double>::infinity();
   for (int t = 0; t < out.count; ++t) {
     const Tet& k = out.tets[static_cast<std::size_t>(t)];
-    w = std::min(w, shape(in.x[k[0]], in.x[k[1]], in.x[k[2]], in.x[k[3]]));
+    w = std::min(w, std::abs(signed_shape_measure(in.x[k[0]], in.x[k[1]], in.x[k[2]], in.x[k[3]])));
   }
   return w;
 }
