@@ -191,7 +191,8 @@ int run_mesh(const MeshArgs& a) {
     reference_kind = "exact";
   }
   if (!reference && !a.no_reference && mesh->num_tets() <= 500'000) {
-    auto fine = stuff_tets(sdf, {.edge_length = 0.5 * report.edge_length});  // uniform: same volume
+    // Same method at h/2 (grading does not change the volume, so the finer mesh is left uniform).
+    auto fine = stuff_tets(sdf, {.edge_length = 0.5 * report.edge_length, .sharpen = def.sharpen});
     if (fine) {
       const double vf = total_volume(*fine);
       reference = vf + (vf - q.volume) / 3.0;

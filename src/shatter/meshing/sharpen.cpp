@@ -46,6 +46,9 @@ struct Sharpener {
   TetMesh& mesh;
   const Sdf& sdf;
   const SharpenDef& def;
+  // Cosines of the smallest and largest dihedral angle a moved node's tets may have.
+  double cos_min = std::cos(def.min_dihedral_deg * std::numbers::pi / 180.0);
+  double cos_max = std::cos(def.max_dihedral_deg * std::numbers::pi / 180.0);
   // Compressed rows, for boundary nodes only (slot b of boundary_nodes[b]): the tets around
   // each boundary node and its boundary triangles.
   std::vector<Index> boundary_nodes, slot;      // slot: node -> row, or -1
@@ -159,8 +162,6 @@ struct Sharpener {
   }
 
   [[nodiscard]] bool shapes_ok(Index v, const Vec3& x) const {
-    const double cos_min = std::cos(def.min_dihedral_deg * std::numbers::pi / 180.0);
-    const double cos_max = std::cos(def.max_dihedral_deg * std::numbers::pi / 180.0);
     for (Index e : star(v)) {
       Mat34 c = mesh.corners(e);
       for (int k = 0; k < 4; ++k)

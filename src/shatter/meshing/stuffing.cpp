@@ -400,9 +400,13 @@ Result<TetMesh> stuff_tets(const Sdf& sdf, const StuffingDef& def, StuffingRepor
   double h = box.extent().maxCoeff() / 12.0;
   int attempts = 0;
   double volume = 0;
+  // The volume estimate needs neither sharpening nor grading (grading keeps the volume).
+  StuffingDef plain = def;
+  plain.sharpen = false;
+  plain.grading = 0;
   for (int i = 0; i < 4 && volume <= 0; ++i, h *= 0.5) {
     ++attempts;
-    auto coarse = stuff_once(sdf, def, h, nullptr);
+    auto coarse = stuff_once(sdf, plain, h, nullptr);
     if (coarse) volume = total_volume(*coarse);
   }
   if (!(volume > 0)) return field_error("shape", "the shape is empty or far thinner than its bounds");
