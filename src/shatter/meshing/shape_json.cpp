@@ -1,230 +1,228 @@
-// Shape JSON: parse a CSG tree into an Sdf, checking every value and naming its JSON path.
+// Shape JSON: parse a CSG tree into an Sdf, checking every value and naming its JSON path (the
+// strict reader of core/json_reader.h: type and range checks, unknown keys, file + path errors).
 #include "shatter/meshing/shape_json.h"
 
-#include <nlohmann/json.hpp>
-
-#include <cmath>
 #include <filesystem>
-#include <optional>
-#include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "shatter/core/file_io.h"
+#include "shatter/core/json_reader.h"
 #include "shatter/meshing/surface_sdf.h"
 
 namespace shatter {
 namespace {
 
-using Json = nlohmann::json;
+using json_input::Json;
+using json_input::ObjectReader;
+using json_input::Where;
 
-struct Parser {
-  std::string file;
-  const ShapeJsonOptions& options;
+constexpr const char* kShapeTypes =
+    "sphere, box, cylinder, capsule, cone, torus, ellipsoid, revolution, extrusion, surface, union, difference, "
+    "intersection, smooth_union";
 
-  Error error(const std::string& path, const std::string& message) const {
-    Error e = field_error(path, message);
-    e.file = file;
+// The value at `key`, or an error "missing; expected <expected>" at its path.
+Result<const Json*> required(ObjectReader& r, std::string_view key, const std::string& expected) {
+  const Json* v = r.get(key);
+  if (!v) return r.where().key(key).error("missing; expected " + expected);
+  return v;
+}
+
+// A required length (m) or other strictly positive number.
+Result<double> positive(ObjectReader& r, std::string_view key) {
+  SHATTER_TRY(v, required(r, key, "a number > 0"));
+  return json_input::read_positive(**v, r.where().key(key));
+}
+
+// A required [x, y, z] of positive numbers (sizes, radii; m).
+Result<Vec3> positive_vec3(ObjectReader& r, std::string_view key) {
+  SHATTER_TRY(v, required(r, key, "an array of 3 numbers [x, y, z], each > 0"));
+  return json_input::read_positive_vec3(**v, r.where().key(key));
+}
+
+// A required closed polygon of [x, y] points (m); for a revolution the points are (r, y), r >= 0.
+Result<std::vector<Vec2>> polygon(ObjectReader& r, std::string_view key, bool revolution) {
+  SHATTER_TRY(v, required(r, key, "an array of [x, y] points"));
+  const Where w = r.where().key(key);
+  SHATTER_TRY(arr, json_input::read_array(**v, w));
+  std::vector<Vec2> pts;
+  pts.reserve((*arr)->size());
+  for (std::size_t i = 0; i < (*arr)->size(); ++i) {
+    SHATTER_TRY(p, json_input::read_vec2((**arr)[i], w.index(i)));
+    pts.push_back(*p);
+  }
+  if (auto ok = check_polygon(pts, revolution, w.path); !ok) {
+    Error e = std::move(ok.error());  // names the path (and the point) already; add the file
+    e.file = *w.file;
     return e;
   }
+  return pts;
+}
 
-  Result<double> number(const Json& node, const std::string& path, const char* key, bool positive,
-                        std::optional<double> fallback = std::nullopt) const {
-    const std::string p = path.empty() ? std::string(key) : path + "." + key;
-    if (!node.contains(key)) {
-      if (fallback) return *fallback;
-      return error(p, "missing; expected a number");
-    }
-    const Json& v = node.at(key);
-    if (!v.is_number()) return error(p, "expected a number, got " + std::string(v.type_name()));
-    const double x = v.get<double>();
-    if (!std::isfinite(x)) return error(p, "expected a finite number");
-    if (positive && !(x > 0)) return error(p, "expected a number > 0, got " + v.dump());
-    return x;
+// Loads {"type": "surface", "file": ...}; errors of the surface itself name the surface file and
+// this node's "file" path.
+Result<Sdf> surface(ObjectReader& r, const ShapeJsonOptions& options) {
+  SHATTER_TRY(v, required(r, "file", "the path of a closed surface (.obj, .ply, .stl)"));
+  const Where w = r.where().key("file");
+  SHATTER_TRY(name, json_input::read_string(**v, w));
+  if (!options.load_surface) return w.error("surface files cannot be loaded here (no surface reader)");
+  std::filesystem::path f = *name;
+  if (f.is_relative() && !options.base_dir.empty()) f = std::filesystem::path(options.base_dir) / f;
+  auto surf = options.load_surface(f.string());
+  if (!surf) {
+    Error e = std::move(surf.error());
+    e.field = w.path;
+    return e;
   }
+  auto dist = SurfaceDistance::create(*surf, f.string());
+  if (!dist) {
+    Error e = std::move(dist.error());
+    e.field = w.path;
+    return e;
+  }
+  return Sdf::surface(std::move(*dist));
+}
 
-  Result<Vec3> vec3(const Json& node, const std::string& path, const char* key, bool positive,
-                    std::optional<Vec3> fallback = std::nullopt) const {
-    const std::string p = path.empty() ? std::string(key) : path + "." + key;
-    if (!node.contains(key)) {
-      if (fallback) return *fallback;
-      return error(p, "missing; expected an array of 3 numbers");
+Result<Sdf> node(const Json& j, const Where& where, const ShapeJsonOptions& options) {
+  ObjectReader r(j, where);
+  if (!r.status().ok()) return r.status().error();
+  // Every node may carry transforms and a comment; the type decides the other keys.
+  const Json* jtranslate = r.get("translate");
+  const Json* jrotate = r.get("rotate");
+  const Json* jscale = r.get("scale");
+  r.allow({"comment"});
+  SHATTER_TRY(jtype, required(r, "type", std::string("one of ") + kShapeTypes));
+  SHATTER_TRY(type_read, json_input::read_string(**jtype, where.key("type")));
+  const std::string& type = *type_read;
+  Sdf s;
+  if (type == "sphere") {
+    SHATTER_TRY(radius, positive(r, "radius"));
+    s = Sdf::sphere(*radius);
+  } else if (type == "box") {
+    SHATTER_TRY(size, positive_vec3(r, "size"));
+    s = Sdf::box(0.5 * *size);
+  } else if (type == "cylinder" || type == "capsule" || type == "cone") {
+    SHATTER_TRY(radius, positive(r, "radius"));
+    SHATTER_TRY(height, positive(r, "height"));
+    s = type == "cylinder" ? Sdf::cylinder(*radius, 0.5 * *height)
+        : type == "capsule" ? Sdf::capsule(*radius, 0.5 * *height)
+                            : Sdf::cone(*radius, *height);
+  } else if (type == "torus") {
+    SHATTER_TRY(big, positive(r, "major_radius"));
+    SHATTER_TRY(small, positive(r, "minor_radius"));
+    if (!(*small < *big)) return where.key("minor_radius").error("expected minor_radius < major_radius");
+    s = Sdf::torus(*big, *small);
+  } else if (type == "ellipsoid") {
+    SHATTER_TRY(radii, positive_vec3(r, "radii"));
+    s = Sdf::ellipsoid(*radii);
+  } else if (type == "revolution") {
+    SHATTER_TRY(profile, polygon(r, "profile", true));
+    s = Sdf::revolution(std::move(*profile));
+  } else if (type == "extrusion") {
+    SHATTER_TRY(poly, polygon(r, "polygon", false));
+    SHATTER_TRY(depth, positive(r, "depth"));
+    s = Sdf::extrusion(std::move(*poly), 0.5 * *depth);
+  } else if (type == "surface") {
+    SHATTER_TRY(surf, surface(r, options));
+    s = std::move(*surf);
+  } else if (type == "union" || type == "difference" || type == "intersection" || type == "smooth_union") {
+    const Where wc = where.key("children");
+    const Json* jc = r.get("children");
+    if (!jc || (jc->is_array() && jc->empty())) return wc.error("missing or empty; expected an array of shapes");
+    SHATTER_TRY(arr, json_input::read_array(*jc, wc));
+    std::vector<Sdf> children;
+    for (std::size_t i = 0; i < (*arr)->size(); ++i) {
+      SHATTER_TRY(child, node((**arr)[i], wc.index(i), options));
+      children.push_back(std::move(*child));
     }
-    const Json& v = node.at(key);
-    if (!v.is_array() || v.size() != 3) return error(p, "expected an array of 3 numbers");
-    Vec3 x;
-    for (int i = 0; i < 3; ++i) {
-      if (!v[i].is_number()) return error(p + "[" + std::to_string(i) + "]", "expected a number");
-      x[i] = v[i].get<double>();
-      if (!std::isfinite(x[i])) return error(p + "[" + std::to_string(i) + "]", "expected a finite number");
-      if (positive && !(x[i] > 0)) return error(p + "[" + std::to_string(i) + "]", "expected a number > 0");
+    if (type == "union") s = Sdf::unite(std::move(children));
+    else if (type == "difference") s = Sdf::subtract(std::move(children));
+    else if (type == "intersection") s = Sdf::intersect(std::move(children));
+    else {
+      SHATTER_TRY(blend, positive(r, "blend"));
+      s = Sdf::smooth_unite(std::move(children), *blend);
     }
-    return x;
+    // "blend" is accepted (and unused) on the plain operations too, so that a smooth_union
+    // becomes a union by changing its type alone.
+    r.allow({"blend"});
+  } else {
+    return where.key("type").error("unknown shape type \"" + type + "\"; expected one of " + kShapeTypes);
   }
-
-  Result<std::vector<Vec2>> polygon(const Json& node, const std::string& path, const char* key,
-                                    bool revolution) const {
-    const std::string p = path.empty() ? std::string(key) : path + "." + key;
-    if (!node.contains(key)) return error(p, "missing; expected an array of [x, y] points");
-    const Json& v = node.at(key);
-    if (!v.is_array()) return error(p, "expected an array of [x, y] points");
-    std::vector<Vec2> pts;
-    for (std::size_t i = 0; i < v.size(); ++i) {
-      const std::string pi = p + "[" + std::to_string(i) + "]";
-      if (!v[i].is_array() || v[i].size() != 2 || !v[i][0].is_number() || !v[i][1].is_number())
-        return error(pi, "expected a point [x, y] of 2 numbers");
-      pts.emplace_back(v[i][0].get<double>(), v[i][1].get<double>());
+  SHATTER_TRY(done, r.finish());
+  // Transforms: scale, then rotate (degrees about X, then Y, then Z), then translate (m).
+  if (jtranslate || jrotate || jscale) {
+    Vec3 translate = Vec3::Zero(), rotate = Vec3::Zero();
+    double scale = 1.0;
+    if (jtranslate) {
+      SHATTER_TRY(t, json_input::read_vec3(*jtranslate, where.key("translate")));
+      translate = *t;
     }
-    auto ok = check_polygon(pts, revolution, p);
-    if (!ok) return error(ok.error().field, ok.error().message);
-    return pts;
-  }
-
-  Result<Sdf> node(const Json& j, const std::string& path) const {
-    if (!j.is_object()) return error(path, "expected an object with a \"type\"");
-    if (!j.contains("type") || !j.at("type").is_string())
-      return error(path + ".type", "missing; expected one of sphere, box, cylinder, capsule, cone, torus, "
-                                   "ellipsoid, revolution, extrusion, surface, union, difference, "
-                                   "intersection, smooth_union");
-    const std::string type = j.at("type").get<std::string>();
-    std::set<std::string> allowed = {"type", "translate", "rotate", "scale", "comment"};
-    auto allow = [&](std::initializer_list<const char*> keys) {
-      for (const char* k : keys) allowed.insert(k);
-    };
-    Sdf s;
-    if (type == "sphere") {
-      allow({"radius"});
-      SHATTER_TRY(r, number(j, path, "radius", true));
-      s = Sdf::sphere(*r);
-    } else if (type == "box") {
-      allow({"size"});
-      SHATTER_TRY(v, vec3(j, path, "size", true));
-      s = Sdf::box(0.5 * *v);
-    } else if (type == "cylinder" || type == "capsule" || type == "cone") {
-      allow({"radius", "height"});
-      SHATTER_TRY(r, number(j, path, "radius", true));
-      SHATTER_TRY(hh, number(j, path, "height", true));
-      s = type == "cylinder" ? Sdf::cylinder(*r, 0.5 * *hh)
-          : type == "capsule" ? Sdf::capsule(*r, 0.5 * *hh)
-                              : Sdf::cone(*r, *hh);
-    } else if (type == "torus") {
-      allow({"major_radius", "minor_radius"});
-      SHATTER_TRY(big, number(j, path, "major_radius", true));
-      SHATTER_TRY(small, number(j, path, "minor_radius", true));
-      if (!(*small < *big)) return error(path + ".minor_radius", "expected minor_radius < major_radius");
-      s = Sdf::torus(*big, *small);
-    } else if (type == "ellipsoid") {
-      allow({"radii"});
-      SHATTER_TRY(v, vec3(j, path, "radii", true));
-      s = Sdf::ellipsoid(*v);
-    } else if (type == "revolution") {
-      allow({"profile"});
-      SHATTER_TRY(poly, polygon(j, path, "profile", true));
-      s = Sdf::revolution(std::move(*poly));
-    } else if (type == "extrusion") {
-      allow({"polygon", "depth"});
-      SHATTER_TRY(poly, polygon(j, path, "polygon", false));
-      SHATTER_TRY(d, number(j, path, "depth", true));
-      s = Sdf::extrusion(std::move(*poly), 0.5 * *d);
-    } else if (type == "surface") {
-      allow({"file"});
-      if (!j.contains("file") || !j.at("file").is_string())
-        return error(path + ".file", "missing; expected the path of a closed surface (.obj, .ply, .stl)");
-      if (!options.load_surface)
-        return error(path + ".file", "surface files cannot be loaded here (no surface reader)");
-      std::filesystem::path f = j.at("file").get<std::string>();
-      if (f.is_relative() && !options.base_dir.empty()) f = std::filesystem::path(options.base_dir) / f;
-      auto surf = options.load_surface(f.string());
-      if (!surf) {
-        Error e = surf.error();
-        e.field = path + ".file";
-        return e;
-      }
-      auto dist = SurfaceDistance::create(*surf, f.string());
-      if (!dist) {
-        Error e = dist.error();
-        e.field = path + ".file";
-        return e;
-      }
-      s = Sdf::surface(std::move(*dist));
-    } else if (type == "union" || type == "difference" || type == "intersection" || type == "smooth_union") {
-      allow({"children", "blend"});
-      const std::string cp = path + ".children";
-      if (!j.contains("children") || !j.at("children").is_array() || j.at("children").empty())
-        return error(cp, "missing or empty; expected an array of shapes");
-      std::vector<Sdf> children;
-      const Json& c = j.at("children");
-      for (std::size_t i = 0; i < c.size(); ++i) {
-        SHATTER_TRY(child, node(c[i], cp + "[" + std::to_string(i) + "]"));
-        children.push_back(std::move(*child));
-      }
-      if (type == "union") s = Sdf::unite(std::move(children));
-      else if (type == "difference") s = Sdf::subtract(std::move(children));
-      else if (type == "intersection") s = Sdf::intersect(std::move(children));
-      else {
-        SHATTER_TRY(k, number(j, path, "blend", true));
-        s = Sdf::smooth_unite(std::move(children), *k);
-      }
-    } else {
-      return error(path + ".type", "unknown shape type \"" + type + "\"; expected one of sphere, box, "
-                   "cylinder, capsule, cone, torus, ellipsoid, revolution, extrusion, surface, union, "
-                   "difference, intersection, smooth_union");
+    if (jrotate) {
+      SHATTER_TRY(d, json_input::read_vec3(*jrotate, where.key("rotate")));
+      rotate = *d;
     }
-    for (const auto& [key, value] : j.items())
-      if (!allowed.count(key)) return error(path + "." + key, "unknown key for a " + type);
-    // Transforms: scale, then rotate (degrees about X, then Y, then Z), then translate.
-    SHATTER_TRY(t, vec3(j, path, "translate", false, Vec3::Zero()));
-    SHATTER_TRY(r, vec3(j, path, "rotate", false, Vec3::Zero()));
-    SHATTER_TRY(sc, number(j, path, "scale", true, 1.0));
-    if (j.contains("translate") || j.contains("rotate") || j.contains("scale"))
-      s = s.transformed(*t, rotation_from_euler_deg(*r), *sc);
-    return s;
+    if (jscale) {
+      SHATTER_TRY(k, json_input::read_positive(*jscale, where.key("scale")));
+      scale = *k;
+    }
+    s = s.transformed(translate, rotation_from_euler_deg(rotate), scale);
   }
-};
+  return s;
+}
 
 }  // namespace
 
 Result<ShapeFile> parse_shape_json(std::string_view text, const std::string& file_name,
                                    const ShapeJsonOptions& options) {
-  Json j;
-  try {
-    j = Json::parse(text.begin(), text.end());
-  } catch (const Json::parse_error& e) {
-    Error err = file_error(file_name, std::string("invalid JSON: ") + e.what());
-    return err;
+  auto doc = json_input::parse_json(text, file_name);
+  if (!doc) {
+    // Shape files report a syntax error as "file: invalid JSON: ... (line N)" (the form the CLI
+    // prints and its tests match), so the line goes into the message rather than "file:N:".
+    Error e = std::move(doc.error());
+    if (e.line >= 0) e.message += " (line " + std::to_string(e.line) + ")";
+    e.line = -1;
+    return e;
   }
-  Parser p{file_name, options};
-  if (!j.is_object()) return p.error("", "expected a JSON object with a \"shape\"");
-  for (const auto& [key, value] : j.items())
-    if (key != "name" && key != "shape" && key != "edge_length" && key != "tets" && key != "grading" && key != "sharpen" &&
-        key != "comment")
-      return p.error(key, "unknown key; expected name, shape, edge_length, tets, grading, sharpen, comment");
+  // A whole-file error, without a field (not "(top level)").
+  if (!doc->is_object())
+    return file_error(file_name, "expected a JSON object with a \"shape\", got " + json_input::type_name(*doc));
+  const Where root{&file_name, ""};
+  ObjectReader r(*doc, root);
+  const Json* jname = r.get("name");
+  const Json* jedge = r.get("edge_length");
+  const Json* jtets = r.get("tets");
+  const Json* jgrading = r.get("grading");
+  const Json* jsharpen = r.get("sharpen");
+  const Json* jshape = r.get("shape");
+  r.allow({"comment"});
+  // Unknown keys first: a misspelt "shape" reads better as a typo than as a missing key.
+  SHATTER_TRY(done, r.finish());
   ShapeFile out;
-  if (j.contains("name")) {
-    if (!j.at("name").is_string()) return p.error("name", "expected a string");
-    out.name = j.at("name").get<std::string>();
+  if (jname) {
+    SHATTER_TRY(name, json_input::read_string(*jname, root.key("name")));
+    out.name = std::move(*name);
   }
-  if (j.contains("edge_length")) {
-    SHATTER_TRY(h, p.number(j, "", "edge_length", true));
+  if (jedge) {
+    SHATTER_TRY(h, json_input::read_positive(*jedge, root.key("edge_length")));
     out.edge_length = *h;
   }
-  if (j.contains("tets")) {
-    const Json& t = j.at("tets");
-    if (!t.is_number_integer() || t.get<std::int64_t>() <= 0) return p.error("tets", "expected an integer > 0");
-    out.target_tets = t.get<std::int64_t>();
+  if (jtets) {
+    const Where w = root.key("tets");
+    SHATTER_TRY(n, json_input::read_integer(*jtets, w));
+    if (*n <= 0) return w.error("expected an integer > 0, got " + std::to_string(*n));
+    out.target_tets = *n;
   }
-  if (j.contains("grading")) {
-    const Json& g = j.at("grading");
-    if (!g.is_number() || !(g.get<double>() >= 0) || !std::isfinite(g.get<double>()))
-      return p.error("grading", "expected a number >= 0");
-    out.grading = g.get<double>();
+  if (jgrading) {
+    SHATTER_TRY(g, json_input::read_non_negative(*jgrading, root.key("grading")));
+    out.grading = *g;
   }
-  if (j.contains("sharpen")) {
-    if (!j.at("sharpen").is_boolean()) return p.error("sharpen", "expected true or false");
-    out.sharpen = j.at("sharpen").get<bool>();
+  if (jsharpen) {
+    SHATTER_TRY(sharpen, json_input::read_bool(*jsharpen, root.key("sharpen")));
+    out.sharpen = *sharpen;
   }
-  if (!j.contains("shape")) return p.error("shape", "missing; expected a shape object");
-  SHATTER_TRY(s, p.node(j.at("shape"), "shape"));
+  if (!jshape) return root.key("shape").error("missing; expected a shape object");
+  SHATTER_TRY(s, node(*jshape, root.key("shape"), options));
   out.sdf = std::move(*s);
   return out;
 }

@@ -1,19 +1,15 @@
 // Buffered writing and node compaction for the MSH / VTK / VTU code.
 #include "shatter/mesh/io/mesh_io_util.h"
 
-#include <bit>
-#include <cstring>
 #include <ostream>
+
+#include "shatter/mesh/io/scalar_type.h"
 
 namespace shatter::io {
 
 template <class T>
 void WriteBuffer::raw(T v, bool big_endian) {
-  char b[sizeof(T)];
-  std::memcpy(b, &v, sizeof(T));
-  if (big_endian != (std::endian::native == std::endian::big))
-    for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(b[i], b[sizeof(T) - 1 - i]);
-  buf_.append(b, sizeof(T));
+  append_binary(buf_, v, big_endian);
   maybe_flush();
 }
 template void WriteBuffer::raw<double>(double, bool);

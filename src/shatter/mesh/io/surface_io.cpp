@@ -1,8 +1,8 @@
 // Triangle surfaces: OBJ, PLY (ASCII / binary LE / binary BE) and STL (ASCII / binary) read and
 // written; polygons are fan-triangulated on read; STL vertices are welded where exactly equal.
+// Binary PLY and STL are written little-endian (append_binary(..., big_endian = false)).
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -13,12 +13,15 @@
 #include "shatter/core/file_io.h"
 #include "shatter/mesh/io/io_util.h"
 #include "shatter/mesh/io/mesh_io.h"
+#include "shatter/mesh/io/scalar_type.h"
 #include "shatter/mesh/io/text_cursor.h"
 
 namespace shatter {
 namespace {
 
 using io::ByteCursor;
+using io::Scalar;
+using io::ScalarType;
 using io::TextCursor;
 
 Result<void> check_surface(const TriSurface& s, const SurfaceWriteOptions& options) {
@@ -32,14 +35,6 @@ Result<void> check_surface(const TriSurface& s, const SurfaceWriteOptions& optio
     return make_error("surface vertex_ids has " + std::to_string(options.vertex_ids.size()) + " entries for " +
                       std::to_string(n) + " vertices");
   return {};
-}
-
-template <class T>
-void put_le(std::string& s, T v) {
-  unsigned char b[sizeof(T)];
-  std::memcpy(b, &v, sizeof(T));
-  if constexpr (std::endian::native == std::endian::big) std::reverse(b, b + sizeof(T));
-  s.append(reinterpret_cast<const char*>(b), sizeof(T));
 }
 
 void flush_if_big(std::ostream& out, std::string& s) {
@@ -95,55 +90,17 @@ std::vector<std::string_view> split_blanks(std::string_view l) {
 }
 
 // ---------------------------------------------------------------- PLY
-enum class PlyType { i8, u8, i16, u16, i32, u32, i64, u64, f32, f64 };
-bool ply_type(std::string_view t, PlyType& out) {
-  struct Entry {
-    const char* a;
-    const char* b;
-    PlyType type;
-  };
-  static constexpr Entry kTypes[] = {
-      {"char", "int8", PlyType::i8},      {"uchar", "uint8", PlyType::u8},     {"short", "int16", PlyType::i16},
-      {"ushort", "uint16", PlyType::u16}, {"int", "int32", PlyType::i32},      {"uint", "uint32", PlyType::u32},
-      {"int64", "int64", PlyType::i64},   {"uint64", "uint64", PlyType::u64},  {"float", "float32", PlyType::f32},
-      {"double", "float64", PlyType::f64},
-  };
-  for (const Entry& e : kTypes)
-    if (t == e.a || t == e.b) {
-      out = e.type;
-      return true;
-    }
-  return false;
-}
-int ply_size(PlyType t) {
-  switch (t) {
-    case PlyType::i8: case PlyType::u8: return 1;
-    case PlyType::i16: case PlyType::u16: return 2;
-    case PlyType::i32: case PlyType::u32: case PlyType::f32: return 4;
-    default: return 8;
-  }
-}
-bool ply_is_float(PlyType t) { return t == PlyType::f32 || t == PlyType::f64; }
-
 struct PlyProperty {
   std::string name;
-  PlyType type = PlyType::f32;
+  ScalarType type = ScalarType::f32;
   bool is_list = false;
-  PlyType count_type = PlyType::u8;
+  ScalarType count_type = ScalarType::u8;
 };
 struct PlyElement {
   std::string name;
   std::int64_t count = 0;
   std::int64_t line = 0;
   std::vector<PlyProperty> props;
-};
-
-/// A scalar read from the body: integer types keep their exact value.
-struct PlyValue {
-  bool is_int = true;
-  std::int64_t i = 0;
-  double d = 0;
-  [[nodiscard]] double as_double() const { return is_int ? static_cast<double>(i) : d; }
 };
 
 class PlyBody {
@@ -161,10 +118,10 @@ class PlyBody {
   std::size_t remaining() const { return format_ == 0 ? text_.remaining() : bytes_.remaining(); }
   bool ascii() const { return format_ == 0; }
 
-  Result<PlyValue> read(PlyType t, const char* what) {
-    PlyValue v;
+  Result<Scalar> read(ScalarType t, const char* what) {
     if (format_ == 0) {
-      if (ply_is_float(t)) {
+      Scalar v;
+      if (io::is_float(t)) {
         SHATTER_TRY(d, text_.next_double(what));
         v.is_int = false;
         v.d = *d;
@@ -174,43 +131,16 @@ class PlyBody {
       }
       return v;
     }
-    switch (t) {
-      case PlyType::i8: { SHATTER_TRY(x, bytes_.u8(what)); v.i = static_cast<std::int8_t>(*x); break; }
-      case PlyType::u8: { SHATTER_TRY(x, bytes_.u8(what)); v.i = *x; break; }
-      case PlyType::i16: { SHATTER_TRY(x, bytes_.u16(what)); v.i = static_cast<std::int16_t>(*x); break; }
-      case PlyType::u16: { SHATTER_TRY(x, bytes_.u16(what)); v.i = *x; break; }
-      case PlyType::i32: { SHATTER_TRY(x, bytes_.i32(what)); v.i = *x; break; }
-      case PlyType::u32: { SHATTER_TRY(x, bytes_.u32(what)); v.i = *x; break; }
-      case PlyType::i64: { SHATTER_TRY(x, bytes_.i64(what)); v.i = *x; break; }
-      case PlyType::u64: {
-        SHATTER_TRY(x, bytes_.u64(what));
-        if (*x > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()))
-          return bytes_.error(std::string(what) + " too large");
-        v.i = static_cast<std::int64_t>(*x);
-        break;
-      }
-      case PlyType::f32: {
-        SHATTER_TRY(x, bytes_.f32(what));
-        v.is_int = false;
-        v.d = *x;
-        break;
-      }
-      case PlyType::f64: {
-        SHATTER_TRY(x, bytes_.f64(what));
-        v.is_int = false;
-        v.d = *x;
-        break;
-      }
-    }
-    if (!v.is_int && !std::isfinite(v.d)) return bytes_.error(std::string("expected ") + what + " (a finite number)");
-    return v;
+    SHATTER_TRY(v, io::read_scalar(bytes_, t, what));
+    if (!v->is_int && !std::isfinite(v->d)) return bytes_.error(std::string("expected ") + what + " (a finite number)");
+    return *v;
   }
 
   /// The item count of a list, checked against the bytes that remain.
   Result<std::int64_t> list_count(const PlyProperty& p) {
     SHATTER_TRY(v, read(p.count_type, "list length"));
     if (!v->is_int || v->i < 0) return error("expected a list length >= 0");
-    const std::int64_t min_bytes = format_ == 0 ? 2 : ply_size(p.type);
+    const std::int64_t min_bytes = format_ == 0 ? 2 : static_cast<std::int64_t>(io::scalar_size(p.type));
     if (v->i > (static_cast<std::int64_t>(remaining()) + 1) / min_bytes)
       return error("list length " + std::to_string(v->i) + " is larger than the " + std::to_string(remaining()) +
                    " bytes that follow can hold");
@@ -352,12 +282,18 @@ Result<SurfaceReadResult> parse_ply(std::string_view bytes, const std::string& n
       PlyProperty p;
       if (tok.size() == 5 && tok[1] == "list") {
         p.is_list = true;
-        if (!ply_type(tok[2], p.count_type) || ply_is_float(p.count_type))
+        const auto count_type = io::scalar_type_from_name(io::ScalarNames::ply, tok[2]);
+        if (!count_type || io::is_float(*count_type))
           return c.error_at(line, "expected an integer list length type, found " + io::quote_token(tok[2]));
-        if (!ply_type(tok[3], p.type)) return c.error_at(line, "unknown PLY type " + io::quote_token(tok[3]));
+        const auto type = io::scalar_type_from_name(io::ScalarNames::ply, tok[3]);
+        if (!type) return c.error_at(line, "unknown PLY type " + io::quote_token(tok[3]));
+        p.count_type = *count_type;
+        p.type = *type;
         p.name = std::string(tok[4]);
       } else if (tok.size() == 3) {
-        if (!ply_type(tok[1], p.type)) return c.error_at(line, "unknown PLY type " + io::quote_token(tok[1]));
+        const auto type = io::scalar_type_from_name(io::ScalarNames::ply, tok[1]);
+        if (!type) return c.error_at(line, "unknown PLY type " + io::quote_token(tok[1]));
+        p.type = *type;
         p.name = std::string(tok[2]);
       } else {
         return c.error_at(line, "expected 'property <type> <name>' or 'property list <type> <type> <name>'");
@@ -377,7 +313,8 @@ Result<SurfaceReadResult> parse_ply(std::string_view bytes, const std::string& n
   for (const PlyElement& e : elements) {
     // Every row takes at least this many bytes, so the count is checked before reserving.
     std::int64_t min_row = 0;
-    for (const PlyProperty& p : e.props) min_row += body.ascii() ? 2 : ply_size(p.is_list ? p.count_type : p.type);
+    for (const PlyProperty& p : e.props)
+      min_row += body.ascii() ? 2 : static_cast<std::int64_t>(io::scalar_size(p.is_list ? p.count_type : p.type));
     if (e.count > 0 && min_row == 0)
       return c.error_at(e.line, "element '" + e.name + "' has rows but no properties");
     if (e.count > 0 && e.count > (static_cast<std::int64_t>(body.remaining()) + 1) / min_row)
@@ -430,7 +367,7 @@ Result<SurfaceReadResult> parse_ply(std::string_view bytes, const std::string& n
         if (e.props[k].name == "vertex_indices" || e.props[k].name == "vertex_index") iv = static_cast<int>(k);
       if (iv < 0 || !e.props[iv].is_list)
         return c.error_at(e.line, "the face element needs a list property 'vertex_indices'");
-      if (ply_is_float(e.props[iv].type)) return c.error_at(e.line, "face vertex indices must have an integer type");
+      if (io::is_float(e.props[iv].type)) return c.error_at(e.line, "face vertex indices must have an integer type");
       std::vector<std::int64_t> face;
       for (std::int64_t f = 0; f < e.count; ++f) {
         const std::int64_t where = body.where();
@@ -494,10 +431,10 @@ Result<void> write_ply(std::ostream& out, const TriSurface& surface, const Surfa
   for (std::size_t i = 0; i < surface.positions.size(); ++i) {
     const Vec3& p = surface.positions[i];
     if (options.binary) {
-      for (int k = 0; k < 3; ++k) put_le<double>(s, p[k]);
+      for (int k = 0; k < 3; ++k) io::append_binary<double>(s, p[k], false);
       if (ids) {
-        if (ids_fit_int) put_le<std::int32_t>(s, static_cast<std::int32_t>(options.vertex_ids[i]));
-        else put_le<std::int64_t>(s, options.vertex_ids[i]);
+        if (ids_fit_int) io::append_binary<std::int32_t>(s, static_cast<std::int32_t>(options.vertex_ids[i]), false);
+        else io::append_binary<std::int64_t>(s, options.vertex_ids[i], false);
       }
     } else {
       for (int k = 0; k < 3; ++k) {
@@ -514,8 +451,8 @@ Result<void> write_ply(std::ostream& out, const TriSurface& surface, const Surfa
   }
   for (const TriIndices& t : surface.triangles) {
     if (options.binary) {
-      put_le<std::uint8_t>(s, 3);
-      for (Index v : t) put_le<std::int32_t>(s, v);
+      io::append_binary<std::uint8_t>(s, 3, false);
+      for (Index v : t) io::append_binary<std::int32_t>(s, v, false);
     } else {
       s += '3';
       for (Index v : t) {
@@ -684,7 +621,7 @@ Result<void> write_stl(std::ostream& out, const TriSurface& surface, const Surfa
     std::string header = "binary STL";
     header.resize(80, ' ');
     s += header;
-    put_le<std::uint32_t>(s, static_cast<std::uint32_t>(surface.triangles.size()));
+    io::append_binary<std::uint32_t>(s, static_cast<std::uint32_t>(surface.triangles.size()), false);
   } else {
     s += "solid surface\n";
   }
@@ -692,10 +629,10 @@ Result<void> write_stl(std::ostream& out, const TriSurface& surface, const Surfa
     const Vec3 &a = surface.positions[t[0]], &b = surface.positions[t[1]], &c = surface.positions[t[2]];
     const Vec3 n = unit_normal(a, b, c);
     if (options.binary) {
-      for (int k = 0; k < 3; ++k) put_le<float>(s, static_cast<float>(n[k]));
+      for (int k = 0; k < 3; ++k) io::append_binary<float>(s, static_cast<float>(n[k]), false);
       for (const Vec3* p : {&a, &b, &c})
-        for (int k = 0; k < 3; ++k) put_le<float>(s, static_cast<float>((*p)[k]));
-      put_le<std::uint16_t>(s, 0);
+        for (int k = 0; k < 3; ++k) io::append_binary<float>(s, static_cast<float>((*p)[k]), false);
+      io::append_binary<std::uint16_t>(s, 0, false);
     } else {
       s += "facet normal";
       for (int k = 0; k < 3; ++k) {

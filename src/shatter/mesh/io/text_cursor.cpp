@@ -1,10 +1,11 @@
 #include "shatter/mesh/io/text_cursor.h"
 
-#include <bit>
 #include <charconv>
 #include <cmath>
 #include <cstring>
 #include <limits>
+
+#include "shatter/mesh/io/scalar_type.h"
 
 namespace shatter::io {
 
@@ -195,8 +196,7 @@ Result<T> ByteCursor::read(const char* what) {
     return error(std::string("file ends where ") + what + " (" + std::to_string(sizeof(T)) + " bytes) was expected");
   unsigned char b[sizeof(T)];
   std::memcpy(b, data_.data() + pos_, sizeof(T));
-  if (big_endian_ != (std::endian::native == std::endian::big))
-    for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(b[i], b[sizeof(T) - 1 - i]);
+  swap_to_native(b, sizeof(T), big_endian_);
   T v;
   std::memcpy(&v, b, sizeof(T));
   pos_ += sizeof(T);

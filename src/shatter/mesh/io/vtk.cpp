@@ -10,55 +10,16 @@
 
 #include "shatter/mesh/io/mesh_io.h"
 #include "shatter/mesh/io/mesh_io_util.h"
+#include "shatter/mesh/io/scalar_type.h"
 #include "shatter/mesh/io/text_cursor.h"
 
 namespace shatter {
 namespace {
 
 using io::ByteCursor;
+using io::ScalarArray;
+using io::ScalarType;
 using io::TextCursor;
-
-enum class VtkType { bit, u8, i8, u16, i16, u32, i32, u64, i64, f32, f64 };
-
-bool vtk_type_from_name(std::string_view t, VtkType& out) {
-  const std::string s = io::to_lower(t);
-  static const std::pair<const char*, VtkType> names[] = {
-      {"bit", VtkType::bit},           {"unsigned_char", VtkType::u8},   {"char", VtkType::i8},
-      {"unsigned_short", VtkType::u16}, {"short", VtkType::i16},         {"unsigned_int", VtkType::u32},
-      {"int", VtkType::i32},           {"unsigned_long", VtkType::u64},  {"long", VtkType::i64},
-      {"float", VtkType::f32},         {"double", VtkType::f64},         {"vtktypeint8", VtkType::i8},
-      {"vtktypeuint8", VtkType::u8},   {"vtktypeint16", VtkType::i16},   {"vtktypeuint16", VtkType::u16},
-      {"vtktypeint32", VtkType::i32},  {"vtktypeuint32", VtkType::u32},  {"vtktypeint64", VtkType::i64},
-      {"vtktypeuint64", VtkType::u64}, {"vtkidtype", VtkType::i64},      {"vtktypefloat32", VtkType::f32},
-      {"vtktypefloat64", VtkType::f64},
-  };
-  for (const auto& [n, v] : names)
-    if (s == n) {
-      out = v;
-      return true;
-    }
-  return false;
-}
-
-std::uint64_t vtk_type_size(VtkType t) {
-  switch (t) {
-    case VtkType::bit: return 0;
-    case VtkType::u8: case VtkType::i8: return 1;
-    case VtkType::u16: case VtkType::i16: return 2;
-    case VtkType::u32: case VtkType::i32: case VtkType::f32: return 4;
-    case VtkType::u64: case VtkType::i64: case VtkType::f64: return 8;
-  }
-  return 8;
-}
-bool is_float(VtkType t) { return t == VtkType::f32 || t == VtkType::f64; }
-
-/// Values of one array: integers kept exact, floats as doubles.
-struct VtkArray {
-  std::vector<std::int64_t> ints;
-  std::vector<double> reals;
-  bool integral = true;
-  [[nodiscard]] std::size_t size() const { return integral ? ints.size() : reals.size(); }
-};
 
 int hex_digit(char c) {
   if (c >= '0' && c <= '9') return c - '0';
@@ -187,11 +148,11 @@ class VtkReader {
     return {};
   }
 
-  Result<void> require_count(std::int64_t count, VtkType type, const char* what) {
+  Result<void> require_count(std::int64_t count, ScalarType type, const char* what) {
     if (count < 0) return c_.error(std::string("negative ") + what + " count " + std::to_string(count));
-    const std::uint64_t per = binary_ ? std::max<std::uint64_t>(vtk_type_size(type), 1) : 2;
+    const std::uint64_t per = binary_ ? std::max<std::uint64_t>(io::scalar_size(type), 1) : 2;
     std::uint64_t need = static_cast<std::uint64_t>(count);
-    if (binary_ && type == VtkType::bit) need = (need + 7) / 8;
+    if (binary_ && type == ScalarType::bit) need = (need + 7) / 8;
     if (need > c_.remaining() / per)
       return c_.error(std::string(what) + ": " + std::to_string(count) + " values declared, more than the " +
                       std::to_string(c_.remaining()) + " bytes that remain can hold");
@@ -199,46 +160,23 @@ class VtkReader {
   }
 
   /// Read `count` values of `type`; keep == false only consumes them.
-  Result<VtkArray> read_values(std::int64_t count, VtkType type, const char* what, bool keep) {
+  Result<ScalarArray> read_values(std::int64_t count, ScalarType type, const char* what, bool keep) {
     if (auto r = require_count(count, type, what); !r) return r.error();
-    VtkArray a;
-    a.integral = !is_float(type);
-    if (keep) {
-      if (a.integral) a.ints.reserve(static_cast<std::size_t>(count));
-      else a.reals.reserve(static_cast<std::size_t>(count));
-    }
+    ScalarArray a;
+    a.integral = !io::is_float(type);
+    if (keep) a.reserve(static_cast<std::size_t>(count));
     if (binary_) {
       if (auto r = start_binary(); !r) return r.error();
       ByteCursor b(bytes_, name_, c_.position(), true);
-      if (type == VtkType::bit) {
+      if (type == ScalarType::bit) {
         SHATTER_TRY(raw, b.take(static_cast<std::size_t>((count + 7) / 8), what));
         if (keep)
           for (std::int64_t i = 0; i < count; ++i)
             a.ints.push_back((static_cast<unsigned char>((*raw)[static_cast<std::size_t>(i / 8)]) >> (7 - i % 8)) & 1);
       } else if (!keep) {
-        SHATTER_TRY(raw, b.take(static_cast<std::size_t>(count) * vtk_type_size(type), what));
+        SHATTER_TRY(raw, b.take(static_cast<std::size_t>(count) * io::scalar_size(type), what));
       } else {
-        for (std::int64_t i = 0; i < count; ++i) {
-          switch (type) {
-            case VtkType::u8: { SHATTER_TRY(x, b.u8(what)); a.ints.push_back(*x); break; }
-            case VtkType::i8: { SHATTER_TRY(x, b.u8(what)); a.ints.push_back(static_cast<std::int8_t>(*x)); break; }
-            case VtkType::u16: { SHATTER_TRY(x, b.u16(what)); a.ints.push_back(*x); break; }
-            case VtkType::i16: { SHATTER_TRY(x, b.u16(what)); a.ints.push_back(static_cast<std::int16_t>(*x)); break; }
-            case VtkType::u32: { SHATTER_TRY(x, b.u32(what)); a.ints.push_back(*x); break; }
-            case VtkType::i32: { SHATTER_TRY(x, b.i32(what)); a.ints.push_back(*x); break; }
-            case VtkType::u64: {
-              SHATTER_TRY(x, b.u64(what));
-              if (*x > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()))
-                return b.error(std::string(what) + ": value " + std::to_string(*x) + " too large");
-              a.ints.push_back(static_cast<std::int64_t>(*x));
-              break;
-            }
-            case VtkType::i64: { SHATTER_TRY(x, b.i64(what)); a.ints.push_back(*x); break; }
-            case VtkType::f32: { SHATTER_TRY(x, b.f32(what)); a.reals.push_back(*x); break; }
-            case VtkType::f64: { SHATTER_TRY(x, b.f64(what)); a.reals.push_back(*x); break; }
-            case VtkType::bit: break;
-          }
-        }
+        SHATTER_TRY(ok, io::read_scalars(b, type, static_cast<std::uint64_t>(count), what, a));
       }
       (void)c_.take_bytes(b.position() - c_.position(), what);
       return a;
@@ -257,12 +195,12 @@ class VtkReader {
     return a;
   }
 
-  Result<VtkType> read_type(const char* what) {
+  Result<ScalarType> read_type(const char* what) {
     const std::string_view t = c_.next_token();
-    VtkType type;
     if (t.empty()) return c_.error(std::string("file ends where the ") + what + " data type was expected");
-    if (!vtk_type_from_name(t, type)) return c_.error(std::string("unknown ") + what + " data type " + io::quote_token(t));
-    return type;
+    const std::optional<ScalarType> type = io::scalar_type_from_name(io::ScalarNames::vtk, t);
+    if (!type) return c_.error(std::string("unknown ") + what + " data type " + io::quote_token(t));
+    return *type;
   }
 
   Result<void> read_points() {
@@ -295,11 +233,11 @@ class VtkReader {
       // CELLS <#offsets> <#connectivity>, then OFFSETS <type> ..., CONNECTIVITY <type> ...
       if (auto r = c_.expect("OFFSETS", true); !r) return r;
       SHATTER_TRY(ot, read_type("OFFSETS"));
-      if (is_float(*ot)) return c_.error("OFFSETS must be an integer type");
+      if (io::is_float(*ot)) return c_.error("OFFSETS must be an integer type");
       SHATTER_TRY(offsets, read_values(*a, *ot, "cell offsets", true));
       if (auto r = c_.expect("CONNECTIVITY", true); !r) return r;
       SHATTER_TRY(ct, read_type("CONNECTIVITY"));
-      if (is_float(*ct)) return c_.error("CONNECTIVITY must be an integer type");
+      if (io::is_float(*ct)) return c_.error("CONNECTIVITY must be an integer type");
       SHATTER_TRY(conn, read_values(*b, *ct, "cell connectivity", true));
       offsets_ = std::move(offsets->ints);
       if (offsets_.empty()) offsets_.push_back(0);
@@ -313,7 +251,7 @@ class VtkReader {
     }
     // CELLS <#cells> <size>, then per cell: k i1 .. ik.
     if (*a > *b) return c_.error("CELLS: " + std::to_string(*a) + " cells cannot fit in a list of " + std::to_string(*b) + " values");
-    SHATTER_TRY(list, read_values(*b, VtkType::i32, "cell list", true));
+    SHATTER_TRY(list, read_values(*b, ScalarType::i32, "cell list", true));
     offsets_.reserve(static_cast<std::size_t>(*a) + 1);
     offsets_.push_back(0);
     conn_.reserve(static_cast<std::size_t>(*b - *a));
@@ -334,7 +272,7 @@ class VtkReader {
     if (have_types_) return c_.error("second CELL_TYPES section");
     have_types_ = true;
     SHATTER_TRY(n, c_.next_int("cell type count"));
-    SHATTER_TRY(t, read_values(*n, VtkType::i32, "cell types", true));
+    SHATTER_TRY(t, read_values(*n, ScalarType::i32, "cell types", true));
     types_ = std::move(t->ints);
     return {};
   }
@@ -346,7 +284,7 @@ class VtkReader {
   }
 
   /// Store an id / tag array if its name is one we restore; consume it otherwise.
-  Result<void> array_body(const std::string& name, int components, std::int64_t tuples, VtkType type) {
+  Result<void> array_body(const std::string& name, int components, std::int64_t tuples, ScalarType type) {
     if (auto r = check_target(tuples); !r) return r;
     if (tuples > std::numeric_limits<std::int64_t>::max() / std::max(components, 1)) return c_.error("array too large");
     const std::int64_t line = c_.line();
@@ -410,14 +348,14 @@ class VtkReader {
   Result<void> read_color_scalars() {
     const std::string name = decode_name(c_.next_token());
     SHATTER_TRY(n, c_.next_int_in("color component count", 1, 4));
-    return array_body(name, static_cast<int>(*n), target_count_, binary_ ? VtkType::u8 : VtkType::f32);
+    return array_body(name, static_cast<int>(*n), target_count_, binary_ ? ScalarType::u8 : ScalarType::f32);
   }
 
   Result<void> read_lookup_table() {
     (void)c_.next_token();
     SHATTER_TRY(n, c_.next_int("lookup table size"));
     if (*n < 0 || *n > std::numeric_limits<std::int64_t>::max() / 4) return c_.error("bad lookup table size");
-    SHATTER_TRY(a, read_values(*n * 4, binary_ ? VtkType::u8 : VtkType::f32, "lookup table", false));
+    SHATTER_TRY(a, read_values(*n * 4, binary_ ? ScalarType::u8 : ScalarType::f32, "lookup table", false));
     return {};
   }
 

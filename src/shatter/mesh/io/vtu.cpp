@@ -16,44 +16,17 @@
 #include "shatter/mesh/io/base64.h"
 #include "shatter/mesh/io/mesh_io.h"
 #include "shatter/mesh/io/mesh_io_util.h"
+#include "shatter/mesh/io/scalar_type.h"
 #include "shatter/mesh/io/text_cursor.h"
 #include "shatter/mesh/io/xml_lite.h"
 
 namespace shatter {
 namespace {
 
+using io::ScalarArray;
+using io::ScalarType;
 using io::XmlDocument;
 using io::XmlElement;
-
-enum class XType { i8, u8, i16, u16, i32, u32, i64, u64, f32, f64 };
-
-bool xtype_from_name(std::string_view s, XType& t) {
-  static const std::pair<const char*, XType> names[] = {
-      {"Int8", XType::i8},   {"UInt8", XType::u8},   {"Int16", XType::i16},   {"UInt16", XType::u16},
-      {"Int32", XType::i32}, {"UInt32", XType::u32}, {"Int64", XType::i64},   {"UInt64", XType::u64},
-      {"Float32", XType::f32}, {"Float64", XType::f64}, {"Char", XType::i8}, {"UChar", XType::u8}};
-  for (const auto& [n, v] : names)
-    if (s == n) {
-      t = v;
-      return true;
-    }
-  return false;
-}
-std::size_t xtype_size(XType t) {
-  switch (t) {
-    case XType::i8: case XType::u8: return 1;
-    case XType::i16: case XType::u16: return 2;
-    case XType::i32: case XType::u32: case XType::f32: return 4;
-    default: return 8;
-  }
-}
-bool xtype_float(XType t) { return t == XType::f32 || t == XType::f64; }
-
-struct Values {
-  bool integral = true;
-  std::vector<std::int64_t> ints;
-  std::vector<double> reals;
-};
 
 class VtuReader {
  public:
@@ -110,10 +83,11 @@ class VtuReader {
   std::vector<int> arrays(int parent) { return doc_.children(parent, "DataArray"); }
 
   /// Decode a DataArray of `count` values (tuples x components); keep == false only checks it.
-  Result<Values> read_array(const XmlElement& e, std::int64_t tuples, int expected_components, bool keep) {
+  Result<ScalarArray> read_array(const XmlElement& e, std::int64_t tuples, int expected_components, bool keep) {
     const std::string* tname = e.attribute("type");
-    XType t;
-    if (!tname || !xtype_from_name(*tname, t)) return err(e, "DataArray has an unknown or missing type " + io::quote_token(tname ? *tname : std::string()));
+    const auto type = tname ? io::scalar_type_from_name(io::ScalarNames::vtu, *tname) : std::nullopt;
+    if (!type) return err(e, "DataArray has an unknown or missing type " + io::quote_token(tname ? *tname : std::string()));
+    const ScalarType t = *type;
     std::int64_t comps = 1;
     if (const std::string* nc = e.attribute("NumberOfComponents"))
       if (!io::parse_int(*nc, comps) || comps < 1 || comps > 1024) return err(e, "bad NumberOfComponents " + io::quote_token(*nc));
@@ -123,8 +97,8 @@ class VtuReader {
     const std::string* fmt = e.attribute("format");
     const std::string format = fmt ? *fmt : "ascii";
     const std::string_view content = bytes_.substr(e.content_begin, e.content_end - e.content_begin);
-    Values v;
-    v.integral = !xtype_float(t);
+    ScalarArray v;
+    v.integral = !io::is_float(t);
     if (format == "ascii") {
       if (count > content.size() / 2 + 1) return err(e, "DataArray holds fewer values than the " + std::to_string(count) + " expected");
       if (!keep) return v;
@@ -134,8 +108,7 @@ class VtuReader {
         error.line += io::line_of(bytes_, e.content_begin) - 1;
         return error;
       };
-      if (v.integral) v.ints.reserve(count);
-      else v.reals.reserve(count);
+      v.reserve(count);
       for (std::uint64_t i = 0; i < count; ++i) {
         if (v.integral) {
           auto x = c.next_int("integer array value");
@@ -165,32 +138,13 @@ class VtuReader {
       SHATTER_TRY(h, b.u32("array byte count"));
       nbytes = *h;
     }
-    const std::size_t size = xtype_size(t);
+    const std::size_t size = io::scalar_size(t);
     if (auto r = b.require(count, size, "array values"); !r) return r.error();
     if (nbytes != count * size)
       return err(e, "DataArray header says " + std::to_string(nbytes) + " bytes, expected " + std::to_string(count * size));
     if (!keep) return v;
-    if (v.integral) v.ints.reserve(count);
-    else v.reals.reserve(count);
-    for (std::uint64_t i = 0; i < count; ++i) {
-      switch (t) {
-        case XType::i8: { SHATTER_TRY(x, b.u8("value")); v.ints.push_back(static_cast<std::int8_t>(*x)); break; }
-        case XType::u8: { SHATTER_TRY(x, b.u8("value")); v.ints.push_back(*x); break; }
-        case XType::i16: { SHATTER_TRY(x, b.u16("value")); v.ints.push_back(static_cast<std::int16_t>(*x)); break; }
-        case XType::u16: { SHATTER_TRY(x, b.u16("value")); v.ints.push_back(*x); break; }
-        case XType::i32: { SHATTER_TRY(x, b.i32("value")); v.ints.push_back(*x); break; }
-        case XType::u32: { SHATTER_TRY(x, b.u32("value")); v.ints.push_back(*x); break; }
-        case XType::i64: { SHATTER_TRY(x, b.i64("value")); v.ints.push_back(*x); break; }
-        case XType::u64: {
-          SHATTER_TRY(x, b.u64("value"));
-          if (*x > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max())) return b.error("value too large");
-          v.ints.push_back(static_cast<std::int64_t>(*x));
-          break;
-        }
-        case XType::f32: { SHATTER_TRY(x, b.f32("value")); v.reals.push_back(*x); break; }
-        case XType::f64: { SHATTER_TRY(x, b.f64("value")); v.reals.push_back(*x); break; }
-      }
-    }
+    v.reserve(count);
+    SHATTER_TRY(ok, io::read_scalars(b, t, count, "value", v));
     return v;
   }
 

@@ -1,11 +1,39 @@
 // Strict JSON reading with file + field-path errors (see json_reader.h).
-#include "shatter/scene/json_reader.h"
+#include "shatter/core/json_reader.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
 namespace shatter::json_input {
+namespace {
+
+// A finite number; `expected` names what the caller wants ("a number > 0") so that a value of the
+// wrong type is told the whole expectation, not only "a number".
+Result<double> read_finite(const Json& value, const Where& where, const char* expected) {
+  if (!value.is_number()) return where.error(std::string("expected ") + expected + ", got " + type_name(value));
+  const double v = value.get<double>();
+  if (!std::isfinite(v)) return where.error("expected a finite number");
+  return v;
+}
+
+// [c0, c1, ...] of exactly N values, each read by `component` at "path[k]"; `shape` is how the
+// array is described in messages ("[x, y, z]").
+template <int N, class Component>
+Result<Eigen::Matrix<double, N, 1>> read_fixed(const Json& value, const Where& where, const char* shape,
+                                               Component component) {
+  if (!value.is_array() || value.size() != static_cast<std::size_t>(N))
+    return where.error("expected an array of " + std::to_string(N) + " numbers " + shape + ", got " +
+                       (value.is_array() ? "an array of " + std::to_string(value.size()) : type_name(value)));
+  Eigen::Matrix<double, N, 1> v;
+  for (std::size_t k = 0; k < static_cast<std::size_t>(N); ++k) {
+    SHATTER_TRY(c, component(value[k], where.index(k)));
+    v[static_cast<Eigen::Index>(k)] = *c;
+  }
+  return v;
+}
+
+}  // namespace
 
 Where Where::key(std::string_view k) const {
   Where w{file, path};
@@ -125,21 +153,16 @@ std::string nearest(std::string_view word, const std::vector<std::string>& candi
   return std::string();
 }
 
-Result<double> read_number(const Json& value, const Where& where) {
-  if (!value.is_number()) return where.error("expected a number, got " + type_name(value));
-  const double v = value.get<double>();
-  if (!std::isfinite(v)) return where.error("expected a finite number");
-  return v;
-}
+Result<double> read_number(const Json& value, const Where& where) { return read_finite(value, where, "a number"); }
 
 Result<double> read_positive(const Json& value, const Where& where) {
-  SHATTER_TRY(v, read_number(value, where));
+  SHATTER_TRY(v, read_finite(value, where, "a number > 0"));
   if (!(*v > 0.0)) return where.error("expected a number > 0, got " + value.dump());
   return *v;
 }
 
 Result<double> read_non_negative(const Json& value, const Where& where) {
-  SHATTER_TRY(v, read_number(value, where));
+  SHATTER_TRY(v, read_finite(value, where, "a number >= 0"));
   if (*v < 0.0) return where.error("expected a number >= 0, got " + value.dump());
   return *v;
 }
@@ -165,16 +188,16 @@ Result<std::string> read_string(const Json& value, const Where& where) {
   return value.get<std::string>();
 }
 
+Result<Vec2> read_vec2(const Json& value, const Where& where) {
+  return read_fixed<2>(value, where, "[x, y]", read_number);
+}
+
 Result<Vec3> read_vec3(const Json& value, const Where& where) {
-  if (!value.is_array() || value.size() != 3)
-    return where.error("expected an array of 3 numbers [x, y, z], got " +
-                       (value.is_array() ? "an array of " + std::to_string(value.size()) : type_name(value)));
-  Vec3 v;
-  for (int k = 0; k < 3; ++k) {
-    SHATTER_TRY(c, read_number(value[static_cast<std::size_t>(k)], where.index(static_cast<std::size_t>(k))));
-    v[k] = *c;
-  }
-  return v;
+  return read_fixed<3>(value, where, "[x, y, z]", read_number);
+}
+
+Result<Vec3> read_positive_vec3(const Json& value, const Where& where) {
+  return read_fixed<3>(value, where, "[x, y, z]", read_positive);
 }
 
 Result<const Json*> read_array(const Json& value, const Where& where) {

@@ -1,4 +1,5 @@
-// Strict reading of JSON input files (internal to the scene layer; not installed): every value is
+// Strict reading of JSON input files, shared by shape files (meshing) and case files (scene);
+// internal, never installed (it exposes nlohmann_json, a private dependency). Every value is
 // checked for its type and range, every unknown key is an error naming the nearest known key, and
 // every error carries the file name and the JSON path of the field ("loads[2].force").
 #pragma once
@@ -25,11 +26,11 @@ struct Where {
 
   [[nodiscard]] Where key(std::string_view k) const;
   [[nodiscard]] Where index(std::size_t i) const;
-  /// An Error naming the file and this path.
+  /// An Error naming the file and this path ("(top level)" for the root).
   [[nodiscard]] Error error(std::string message) const;
 };
 
-/// Parse JSON text. Syntax errors name the line and column.
+/// Parse JSON text. Syntax errors name the line (Error::line) and what was wrong.
 Result<Json> parse_json(std::string_view text, const std::string& file);
 
 /// A short description of a JSON value's type for messages ("a string", "an array", ...).
@@ -39,7 +40,7 @@ std::string type_name(const Json& value);
 /// that was never asked for, suggesting the nearest known one.
 class ObjectReader {
  public:
-  /// Fails (via ok()) when `value` is not an object.
+  /// Fails (via status()) when `value` is not an object.
   ObjectReader(const Json& value, Where where);
   [[nodiscard]] const Result<void>& status() const { return status_; }
   [[nodiscard]] const Where& where() const { return where_; }
@@ -65,6 +66,7 @@ std::size_t edit_distance(std::string_view a, std::string_view b);
 std::string nearest(std::string_view word, const std::vector<std::string>& candidates);
 
 // Typed readers: each fails with "expected ..., got ..." at `where`.
+/// A finite number.
 Result<double> read_number(const Json& value, const Where& where);
 /// A finite number > 0 (strictly).
 Result<double> read_positive(const Json& value, const Where& where);
@@ -73,8 +75,12 @@ Result<double> read_non_negative(const Json& value, const Where& where);
 Result<std::int64_t> read_integer(const Json& value, const Where& where);
 Result<bool> read_bool(const Json& value, const Where& where);
 Result<std::string> read_string(const Json& value, const Where& where);
+/// [x, y] of finite numbers.
+Result<Vec2> read_vec2(const Json& value, const Where& where);
 /// [x, y, z] of finite numbers.
 Result<Vec3> read_vec3(const Json& value, const Where& where);
+/// [x, y, z] of finite numbers, each > 0 (sizes, radii); a bad component is named by its index.
+Result<Vec3> read_positive_vec3(const Json& value, const Where& where);
 /// An array (possibly empty).
 Result<const Json*> read_array(const Json& value, const Where& where);
 
