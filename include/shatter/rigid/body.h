@@ -1,0 +1,75 @@
+// One body of the simulation split as MuJoCo splits mjModel and mjData: BodyModel is what never
+// changes between events (rest mesh and its topology, material, FEM rest data, lumped masses, exact
+// mass properties); BodyState is what changes (rigid pose and velocities, accumulated plastic strain,
+// time-averaged stress, the static solver's cached pattern and factorization). Functions read
+// (const BodyModel&, BodyState&); an impact changes the model only through the two documented
+// updates below: a plastic update in place, or a new model per fragment after a cut.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "shatter/core/error.h"
+#include "shatter/core/types.h"
+#include "shatter/fem/constitutive.h"
+#include "shatter/fem/fem_model.h"
+#include "shatter/fem/material.h"
+#include "shatter/fracture/crack.h"
+#include "shatter/fracture/plasticity.h"
+#include "shatter/mesh/mass_properties.h"
+#include "shatter/mesh/tet_mesh.h"
+#include "shatter/mesh/topology.h"
+#include "shatter/solve/static_solver.h"
+
+namespace shatter {
+
+/// The constant data of one body. The rest mesh is in the body frame: its centre of mass is the
+/// origin (make_body_model moves it there), so world positions are x = position + R(orientation) r.
+struct BodyModel {
+  TetMesh mesh;            ///< rest mesh, body frame, m
+  TetFaces faces;          ///< unique faces, face adjacency, boundary faces of `mesh`
+  TriSurface surface;      ///< boundary triangles (outward) over the boundary nodes
+  FemModel fem;            ///< material, model kind, per-tet rest data, lumped node masses
+  MassProperties mass;     ///< exact, about the centre of mass (the body-frame origin)
+};
+
+/// Rigid motion of a body (docs/method.md §2.7, eq. 23).
+struct RigidState {
+  Vec3 position = Vec3::Zero();          ///< centre of mass in the world, m
+  Quat orientation = Quat::Identity();   ///< body to world rotation (unit)
+  Vec3 linear_velocity = Vec3::Zero();   ///< of the centre of mass, m/s
+  Vec3 angular_velocity = Vec3::Zero();  ///< world frame, rad/s
+};
+
+/// The changing data of one body.
+struct BodyState {
+  RigidState rigid;
+  std::vector<double> plastic_strain;          ///< accumulated equivalent plastic strain (#tets)
+  std::optional<StressHistory> stress_history; ///< time-averaged stress (#tets), when used
+  /// Pattern and factorization kept between impacts (a cache: not copyable, so the state is
+  /// move-only; make_body_state creates it).
+  std::unique_ptr<StaticSolver> solver;
+};
+
+/// Build a body from a rest mesh given in the world: the mesh is validated (positively oriented
+/// tets, no unused node), moved into the body frame, and its model built. `rigid` receives the
+/// pose that puts the body where the mesh was (position = centre of mass, orientation identity).
+/// Errors: an invalid mesh or material, a mesh with no tets.
+Result<BodyModel> make_body_model(const TetMesh& world_mesh, const Material& material,
+                                  ModelKind model = ModelKind::stvk, RigidState* rigid = nullptr);
+
+/// A fresh state: the given rigid motion, no plastic strain, no stress history, an empty solver.
+BodyState make_body_state(const BodyModel& model, const RigidState& rigid = {});
+
+/// World positions of the body's nodes at its pose (m, #nodes).
+std::vector<Vec3> world_positions(const BodyModel& model, const RigidState& rigid);
+
+/// Follow a plastic event (apply_plasticity on this body) in place: the rest positions of the moved
+/// nodes, the FEM rest data of their tets (update_rest_shape), the boundary surface and the
+/// plastic strain change; tets, node masses and the mass are kept (mass is conserved). The centre
+/// of mass and inertia are recomputed for the new shape at the kept mass, and the body frame is
+/// re-centred on the new centre of mass (rigid.position moves with it so no node jumps).
+void apply_plastic_update(BodyModel& model, BodyState& state, const PlasticResult& plastic);
+
+}  // namespace shatter

@@ -1,0 +1,75 @@
+// Body model and state (see body.h).
+#include "shatter/rigid/body.h"
+
+#include <string>
+#include <utility>
+
+#include "shatter/mesh/validate.h"
+
+namespace shatter {
+
+Result<BodyModel> make_body_model(const TetMesh& world_mesh, const Material& material, ModelKind model,
+                                  RigidState* rigid) {
+  if (world_mesh.num_tets() == 0) return make_error("the body's mesh has no tetrahedra");
+  SHATTER_TRY(valid_material, validate_material(material));
+  const ValidationReport report = validate_mesh(world_mesh);
+  if (report.has_errors())
+    return make_error("the body's mesh is not valid: " + report.problems.front().message);
+  for (Index e = 0; e < world_mesh.num_tets(); ++e)
+    if (!(signed_volume(world_mesh, e) > 0))
+      return make_error("tet " + std::to_string(e) + " of the body's mesh is not positively oriented (signed volume " +
+                        std::to_string(signed_volume(world_mesh, e)) + " m^3)");
+  BodyModel b;
+  b.mesh = world_mesh;
+  const MassProperties world_mass = mass_properties(world_mesh, material.density);
+  if (!(world_mass.volume > 0)) return make_error("the body's mesh has no positive volume");
+  // Body frame: origin at the centre of mass, axes as the world's.
+  for (Vec3& p : b.mesh.positions) p -= world_mass.center;
+  b.faces = compute_faces(b.mesh);
+  b.surface = boundary_surface(b.mesh, b.faces);
+  b.fem = make_fem_model(b.mesh, material, model);
+  b.mass = mass_properties(b.mesh, material.density);
+  if (rigid) {
+    *rigid = RigidState{};
+    rigid->position = world_mass.center;
+  }
+  return b;
+}
+
+BodyState make_body_state(const BodyModel& model, const RigidState& rigid) {
+  BodyState s;
+  s.rigid = rigid;
+  s.plastic_strain.assign(static_cast<std::size_t>(model.mesh.num_tets()), 0.0);
+  s.solver = std::make_unique<StaticSolver>();
+  return s;
+}
+
+std::vector<Vec3> world_positions(const BodyModel& model, const RigidState& rigid) {
+  const Mat3 R = rigid.orientation.toRotationMatrix();
+  std::vector<Vec3> x(model.mesh.positions.size());
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] = rigid.position + R * model.mesh.positions[i];
+  return x;
+}
+
+void apply_plastic_update(BodyModel& model, BodyState& state, const PlasticResult& plastic) {
+  SHATTER_CHECK(plastic.rest_positions.size() == model.mesh.positions.size());
+  SHATTER_CHECK(plastic.plastic_strain.size() == model.mesh.tets.size());
+  state.plastic_strain = plastic.plastic_strain;
+  if (plastic.moved_nodes.empty()) return;
+  // The new shape at the kept mass: density scaled by the volume change.
+  const double mass = model.mass.mass;
+  model.mesh.positions = plastic.rest_positions;
+  const double volume = total_volume(model.mesh);
+  const MassProperties shifted = mass_properties(model.mesh, mass / volume);
+  // Re-centre the body frame on the new centre of mass; the world pose moves with it.
+  const Vec3 dc = shifted.center;
+  for (Vec3& p : model.mesh.positions) p -= dc;
+  state.rigid.position += state.rigid.orientation * dc;
+  std::vector<Index> all(model.mesh.positions.size());
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<Index>(i);
+  update_rest_shape(model.fem, model.mesh.positions, all);
+  model.surface = boundary_surface(model.mesh, model.faces);
+  model.mass = mass_properties(model.mesh, mass / volume);
+}
+
+}  // namespace shatter
