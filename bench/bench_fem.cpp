@@ -56,8 +56,9 @@ void BM_ForcesAccelerated(benchmark::State& state) {
   const int saved = num_threads();
   set_num_threads(static_cast<int>(state.range(2)));
   std::vector<Vec3> f;
+  ForceWorkspace workspace;
   for (auto _ : state) {
-    internal_forces(c.model, c.x, f);
+    internal_forces(c.model, c.x, f, workspace);
     benchmark::DoNotOptimize(f.data());
   }
   set_num_threads(saved);

@@ -7,7 +7,8 @@ set_target_properties(shatter_all PROPERTIES EXPORT_NAME shatter)
 target_link_libraries(shatter_all INTERFACE ${SHATTER_MODULES})
 install(TARGETS ${SHATTER_MODULES} shatter_all EXPORT shatterTargets
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
-install(DIRECTORY ${PROJECT_SOURCE_DIR}/src/shatter DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
+# Only the public headers (include/shatter/); the internal ones under src/ stay private.
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/shatter DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
   FILES_MATCHING PATTERN "*.h")
 install(EXPORT shatterTargets NAMESPACE shatter:: DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/shatter)
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/shatterConfig.cmake.in

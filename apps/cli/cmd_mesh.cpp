@@ -18,10 +18,8 @@
 #include "shatter/mesh/io/mesh_io.h"
 #include "shatter/mesh/quality.h"
 #include "shatter/mesh/topology.h"
-#include "shatter/meshing/box_csg_mesher.h"
-#include "shatter/meshing/revolve_mesher.h"
+#include "shatter/meshing/mesh_shape.h"
 #include "shatter/meshing/shape_json.h"
-#include "shatter/meshing/stuffing.h"
 #include "shatter/meshing/surface_sdf.h"
 
 namespace shatter::cli {
@@ -136,69 +134,24 @@ int run_mesh(const MeshArgs& a) {
   def.edge_length /= std::cbrt(a.refine);
   def.target_tets = static_cast<std::int64_t>(std::llround(static_cast<double>(def.target_tets) * a.refine));
 
-  // Method: structured meshers where the shape qualifies (auto), else isosurface stuffing.
-  const std::string& m = a.method;
-  if (m != "auto" && m != "stuffing" && m != "structured" && m != "box-csg" && m != "revolve")
-    return report_error("--method: expected auto, stuffing, structured, box-csg or revolve, got \"" + m + "\"",
-                        kExitUsage);
+  auto method = parse_mesh_method(a.method);
+  if (!method) return report_error("--method: " + method.error().message, kExitUsage);
   if (a.segments < 0 || (a.segments > 0 && a.segments < 3))
     return report_error("--segments: expected at least 3", kExitUsage);
-  const bool is_box = box_csg_boxes(sdf).has_value();
-  const bool is_revolve = revolved_shape(sdf).has_value();
-  std::string method = "stuffing";
-  if (m == "box-csg" || m == "revolve" || m == "structured") {
-    const bool ok = m == "box-csg" ? is_box : m == "revolve" ? is_revolve : (is_box || is_revolve);
-    if (!ok)
-      return report_error((name.empty() ? std::string("shape") : name) + ": --method " + m +
-                              ": the shape is not " +
-                              (m == "box-csg"   ? "made of axis-aligned boxes (union, difference, intersection)"
-                               : m == "revolve" ? "a single revolution"
-                                                : "a box CSG or a single revolution"),
-                          kExitBadInput);
-    method = m == "structured" ? (is_box ? "box-csg" : "revolve") : m;
-  } else if (m == "auto") {
-    method = is_box ? "box-csg" : is_revolve ? "revolve" : "stuffing";
-  }
+  const MeshShapeDef shape_def{.stuffing = def, .method = *method, .segments = a.segments};
 
   const auto t0 = std::chrono::steady_clock::now();
-  StuffingReport report;
-  std::optional<double> exact;  // exact volume from a structured mesher
-  RevolveReport rr;
-  Result<TetMesh> mesh = make_error("no mesh");
-  if (method == "box-csg") {
-    BoxCsgReport br;
-    mesh = mesh_box_csg(sdf, {.edge_length = def.edge_length, .target_tets = def.target_tets}, &br);
-    report.edge_length = br.edge_length;
-    exact = br.exact_volume;
-  } else if (method == "revolve") {
-    mesh = mesh_revolution(sdf, {.edge_length = def.edge_length, .target_tets = def.target_tets, .segments = a.segments},
-                           &rr);
-    report.edge_length = rr.edge_length;
-    exact = rr.exact_volume;
-  } else {
-    mesh = stuff_tets(sdf, def, &report);
-  }
+  auto meshed = mesh_shape(sdf, shape_def, name);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (!mesh) return report_error(mesh.error().to_string(), kExitBadInput);
+  if (!meshed) return report_error(meshed.error().to_string(), kExitBadInput);
+  const TetMesh* mesh = &meshed->mesh;
+  const std::string used = to_string(meshed->method);
+  const StuffingReport& report = meshed->stuffing;
+  const RevolveReport& rr = meshed->revolve;
 
-  // Reference volume: analytic, exact for box CSG, or Richardson extrapolation from a mesh at h/2
-  // (volume error ~ h^2, observed in tests/meshing): V ~ V(h/2) + (V(h/2) - V(h)) / 3.
   const QualitySummary q = mesh_quality(*mesh);
-  std::optional<double> reference = sdf.analytic_volume();
-  std::string reference_kind = reference ? "analytic" : "";
-  if (!reference && exact) {
-    reference = exact;
-    reference_kind = "exact";
-  }
-  if (!reference && !a.no_reference && mesh->num_tets() <= 500'000) {
-    // Same method at h/2 (grading does not change the volume, so the finer mesh is left uniform).
-    auto fine = stuff_tets(sdf, {.edge_length = 0.5 * report.edge_length, .sharpen = def.sharpen});
-    if (fine) {
-      const double vf = total_volume(*fine);
-      reference = vf + (vf - q.volume) / 3.0;
-      reference_kind = "extrapolated from h/2";
-    }
-  }
+  const std::optional<ReferenceVolume> ref =
+      reference_volume(sdf, shape_def, *meshed, q.volume, /*extrapolate=*/!a.no_reference);
   const TriSurface boundary = boundary_surface(*mesh);
   const Index components = connected_components(*mesh).count;
 
@@ -211,7 +164,7 @@ int run_mesh(const MeshArgs& a) {
   if (a.json) {
     nlohmann::ordered_json j;
     j["shape"] = name;
-    j["method"] = method;
+    j["method"] = used;
     if (!a.output.empty()) j["output"] = a.output;
     j["edge_length"] = report.edge_length;
     j["nodes"] = mesh->num_nodes();
@@ -221,19 +174,19 @@ int run_mesh(const MeshArgs& a) {
     j["dihedral_deg"] = {{"min", q.min_dihedral_deg}, {"max", q.max_dihedral_deg}};
     j["aspect_ratio"] = {{"min", q.min_aspect}, {"max", q.max_aspect}, {"mean", q.mean_aspect}};
     j["volume"] = q.volume;
-    if (reference) {
-      j["reference_volume"] = *reference;
-      j["reference_kind"] = reference_kind;
-      j["volume_error"] = (q.volume - *reference) / *reference;
+    if (ref) {
+      j["reference_volume"] = ref->volume;
+      j["reference_kind"] = ref->kind;
+      j["volume_error"] = (q.volume - ref->volume) / ref->volume;
     }
-    if (method == "revolve") {
+    if (used == "revolve") {
       j["segments"] = rr.segments;
       j["angular_levels"] = rr.levels;
     }
     j["lattice_vertices"] = report.lattice_vertices;
     j["warped"] = report.warped;
-    if (method == "stuffing") j["sharpened"] = report.sharpened;
-    if (method == "stuffing" && def.grading > 0) {
+    if (used == "stuffing") j["sharpened"] = report.sharpened;
+    if (used == "stuffing" && def.grading > 0) {
       j["grading"] = def.grading;
       j["tets_before_grading"] = report.tets_before_grading;
     }
@@ -242,23 +195,23 @@ int run_mesh(const MeshArgs& a) {
   } else {
     std::string out;
     out += fmt::format("shape        {}\n", name);
-    out += fmt::format("method       {}\n", method);
+    out += fmt::format("method       {}\n", used);
     out += fmt::format("edge length  {:.6g} m\n", report.edge_length);
-    if (method == "revolve")
+    if (used == "revolve")
       out += fmt::format("segments     {} at the largest radius, {} angular level(s) below\n", rr.segments, rr.levels);
     out += fmt::format("nodes        {}\n", mesh->num_nodes());
     out += fmt::format("tets         {}\n", mesh->num_tets());
-    if (method == "stuffing" && def.grading > 0)
+    if (used == "stuffing" && def.grading > 0)
       out += fmt::format("grading      {:g} ({} tets before)\n", def.grading, report.tets_before_grading);
-    if (method == "stuffing" && def.sharpen)
+    if (used == "stuffing" && def.sharpen)
       out += fmt::format("sharpened    {} boundary node moves onto creases and corners\n", report.sharpened);
     out += fmt::format("boundary     {} triangles, {} component(s)\n", boundary.triangles.size(), components);
     out += fmt::format("dihedral     {:.2f} .. {:.2f} deg\n", q.min_dihedral_deg, q.max_dihedral_deg);
     out += fmt::format("aspect       {:.3f} .. {:.3f} (mean {:.3f})\n", q.min_aspect, q.max_aspect, q.mean_aspect);
     out += fmt::format("volume       {:.9g} m^3\n", q.volume);
-    if (reference)
-      out += fmt::format("reference    {:.9g} m^3 ({}), error {:+.3f} %\n", *reference, reference_kind,
-                         100.0 * (q.volume - *reference) / *reference);
+    if (ref)
+      out += fmt::format("reference    {:.9g} m^3 ({}), error {:+.3f} %\n", ref->volume, ref->kind,
+                         100.0 * (q.volume - ref->volume) / ref->volume);
     out += fmt::format("time         {:.3f} s\n", seconds);
     std::fputs(out.c_str(), stdout);
   }

@@ -9,20 +9,14 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 #include <string>
-#include <system_error>
 #include <vector>
 
 #include "command.h"
-#include "shatter/fem/fem_model.h"
 #include "shatter/mesh/io/mesh_io.h"
-#include "shatter/fracture/fracture.h"
-#include "shatter/scene/static_case.h"
+#include "shatter/scene/static_analysis.h"
 #include "shatter/scene/static_fracture.h"
-#include "shatter/scene/static_results.h"
-#include "shatter/solve/static_solver.h"
 
 namespace shatter::cli {
 namespace {
@@ -43,18 +37,6 @@ double ms_since(Clock::time_point t0) {
 
 std::string vec_text(const Vec3& v) { return fmt::format("[{:.6g}, {:.6g}, {:.6g}]", v.x(), v.y(), v.z()); }
 
-// Remove fragment_<k>.<ext> (and .ele beside .node) for k >= first, left by an earlier run that made
-// more fragments, so the folder holds exactly this run's fragments.
-void remove_stale_fragments(const std::filesystem::path& dir, std::size_t first, const std::string& ext) {
-  for (std::size_t k = first;; ++k) {
-    const std::filesystem::path p = dir / fmt::format("fragment_{}.{}", k, ext);
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(p, ec)) break;
-    std::filesystem::remove(p, ec);
-    if (ext == "node") std::filesystem::remove(dir / fmt::format("fragment_{}.ele", k), ec);
-  }
-}
-
 int run_static(const StaticArgs& args) {
   // Read the inputs.
   const auto t_read = Clock::now();
@@ -66,19 +48,10 @@ int run_static(const StaticArgs& args) {
   if (mesh.num_tets() == 0) return report_error(args.mesh_path + ": the mesh has no tetrahedra", kExitBadInput);
   const double read_ms = ms_since(t_read);
 
-  // Anchors, loads, model.
-  const auto t_setup = Clock::now();
-  auto resolved = resolve_static_case(*scase, mesh);
-  if (!resolved) return report_error(resolved.error().to_string(), kExitBadInput);
-  const FemModel model = make_fem_model(mesh, scase->material, scase->model);
-  const StaticProblem problem = make_static_problem(*scase, *resolved);
-  const StaticSolverOptions options = make_solver_options(scase->solver);
-  const double setup_ms = ms_since(t_setup);
-
-  // Solve.
-  std::vector<Vec3> x = mesh.positions;
-  auto report = solve_static(model, problem, x, options);
-  if (!report) return report_error(report.error().to_string(), kExitBadInput);
+  // Solve (and crack).
+  auto analysis = run_static_analysis(*scase, mesh, {.fracture = args.fracture});
+  if (!analysis) return report_error(analysis.error().to_string(), kExitBadInput);
+  const StaticReport* report = &analysis->report;
   if (!report->converged)
     return report_error(fmt::format("the static solver did not converge: {} (Newton iterations {}, relative "
                                     "residual {:.3g}, load fraction {:.3g}); no output written",
@@ -86,66 +59,31 @@ int run_static(const StaticArgs& args) {
                                     report->load_fraction),
                         kExitFailure);
 
-  // Results and files.
+  // Files.
   const auto t_write = Clock::now();
-  const StaticResults results = compute_static_results(model, mesh, x);
-  const std::filesystem::path out_dir =
-      args.out_dir.empty() ? std::filesystem::path(scase->name + "_out") : std::filesystem::path(args.out_dir);
-  std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec || !std::filesystem::is_directory(out_dir))
-    return report_error(out_dir.string() + ": cannot create the output folder" + (ec ? ": " + ec.message() : ""),
-                        kExitOutput);
-  const std::string disp_path = (out_dir / "displacements.csv").string();
-  const std::string elem_path = (out_dir / "elements.csv").string();
-  const std::string vtu_path = (out_dir / "result.vtu").string();
-  for (const auto& written : {write_displacements_csv(disp_path, mesh, results),
-                              write_elements_csv(elem_path, mesh, results),
-                              write_result_mesh(vtu_path, mesh, results)})
-    if (!written) return report_error(written.error().to_string(), kExitOutput);
-  std::vector<std::string> outputs = {disp_path, elem_path, vtu_path};
+  const std::string out_dir = args.out_dir.empty() ? scase->name + "_out" : args.out_dir;
+  auto written = write_static_outputs(out_dir, mesh, *analysis, args.fragment_format);
+  if (!written) return report_error(written.error().to_string(), kExitOutput);
+  const double write_ms = ms_since(t_write);
+  const std::vector<std::string> outputs = written->all();
+  const std::vector<std::string>& fragment_paths = written->fragments;
+  const std::string& rest_path = written->rest_shape;
 
-  // Fracture and plasticity of the solution.
-  FractureResult frac;
-  double fracture_ms = 0;
-  std::vector<std::string> fragment_paths;
-  std::string fragments_path, cracks_path, rest_path;
+  const double setup_ms = analysis->setup_ms;
+  const double fracture_ms = analysis->fracture_ms;
+  const ResolvedStaticCase* resolved = &analysis->resolved;
+  const StaticProblem& problem = analysis->problem;
+  const StaticSolverOptions& options = analysis->solver_options;
+  const StaticResults& results = analysis->results;
+  static const FractureResult kNoFracture;
+  const FractureResult& frac = analysis->fracture ? *analysis->fracture : kNoFracture;
   const bool plastic = std::isfinite(scase->material.yield_stress);
-  if (args.fracture) {
-    const auto t_frac = Clock::now();
-    frac = fracture(mesh, x, scase->material, scase->model, scase->fracture);
-    fracture_ms = ms_since(t_frac);
-    for (std::size_t k = 0; k < frac.fragments.size(); ++k) {
-      const std::string p = (out_dir / fmt::format("fragment_{}.{}", k, args.fragment_format)).string();
-      auto w = write_mesh(p, fragment_mesh_with_ids(frac, k));
-      if (!w) return report_error(w.error().to_string(), kExitOutput);
-      fragment_paths.push_back(p);
-    }
-    remove_stale_fragments(out_dir, frac.fragments.size(), args.fragment_format);
-    fragments_path = (out_dir / "fragments.vtu").string();
-    cracks_path = (out_dir / "cracks.csv").string();
-    for (const auto& written : {write_fragments_mesh(fragments_path, mesh, frac), write_cracks_csv(cracks_path, mesh, frac)})
-      if (!written) return report_error(written.error().to_string(), kExitOutput);
-    if (plastic) {
-      rest_path = (out_dir / "rest_shape.vtu").string();
-      auto w = write_rest_shape(rest_path, frac);
-      if (!w) return report_error(w.error().to_string(), kExitOutput);
-    }
-    outputs.insert(outputs.end(), fragment_paths.begin(), fragment_paths.end());
-    outputs.push_back(fragments_path);
-    outputs.push_back(cracks_path);
-    if (!rest_path.empty()) outputs.push_back(rest_path);
-  }
-  const double write_ms = ms_since(t_write) - fracture_ms;
-
   const Material& mat = scase->material;
   const Index maxu = results.max_displacement_node;
   const Index maxs = results.max_principal_tet;
   const Index maxvm = results.max_von_mises_tet;
   const double strength_ratio = results.max_principal_stress / mat.tensile_strength;
-  Vec3 gravity_load = Vec3::Zero();
-  if (problem.gravity)
-    for (double m : model.node_mass) gravity_load += m * problem.gravity_vector;
+  const Vec3& gravity_load = analysis->gravity_load;
 
   if (args.json) {
     nlohmann::ordered_json j;

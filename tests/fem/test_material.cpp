@@ -85,5 +85,20 @@ TEST(Material, ValidationNamesTheField) {
   EXPECT_OK(validate_material(inf_ok));
 }
 
+TEST(Material, DefaultIsThePorcelainPreset) {
+  const Material d{};
+  EXPECT_OK(validate_material(d));
+  const Material p = material_preset("porcelain").value();
+  EXPECT_EQ(d.name, p.name);
+  EXPECT_EQ(d.youngs_modulus, p.youngs_modulus);
+  EXPECT_EQ(d.poisson_ratio, p.poisson_ratio);
+  EXPECT_EQ(d.density, p.density);
+  EXPECT_EQ(d.tensile_strength, p.tensile_strength);
+  EXPECT_EQ(d.yield_stress, p.yield_stress);
+  EXPECT_EQ(d.fracture_toughness, p.fracture_toughness);
+  // Designated initializers change one value and keep the rest valid.
+  EXPECT_OK(validate_material(Material{.density = 2300}));
+}
+
 }  // namespace
 }  // namespace shatter

@@ -20,6 +20,7 @@ Material test_material(double strength) {
   m.density = 1000;
   m.tensile_strength = strength;
   m.yield_stress = kInfinity;
+  m.fracture_toughness = kInfinity;
   return m;
 }
 

@@ -6,6 +6,7 @@
 
 #include "fracture_checks.h"
 #include "shatter/core/parallel.h"
+#include "shatter/fem/fem_model.h"
 #include "shatter/fracture/fracture.h"
 #include "shatter/mesh/generate.h"
 #include "support/test_support.h"
@@ -28,7 +29,7 @@ TEST(Fracture, SeveralCracksConserveAndMap) {
   const auto x = wavy(m, 3e-3);
   FractureOptions options;
   options.crack = {.radius_fraction = 0.25, .max_cracks = 4};
-  const FractureResult r = fracture(m, x, glass, ModelKind::stvk, options);
+  const FractureResult r = fracture(m, make_fem_model(m, glass, ModelKind::stvk), x, options);
   ASSERT_GE(r.events.size(), 2u);
   EXPECT_GE(r.fragments.size(), 2u);
   EXPECT_TRUE(test::mesh_is_valid(r.mesh));
@@ -72,7 +73,7 @@ TEST(Fracture, DuctileTearAfterPlasticStrain) {
   FractureOptions options;
   options.plasticity.max_plastic_strain = 0.1 * eps;
   options.crack.max_cracks = 1;
-  const FractureResult r = fracture(m, x, lead, ModelKind::stvk, options);
+  const FractureResult r = fracture(m, make_fem_model(m, lead, ModelKind::stvk), x, options);
   ASSERT_EQ(r.events.size(), 1u);
   EXPECT_TRUE(r.events[0].plan.ductile);
   EXPECT_LT(r.events[0].plan.stress, lead.tensile_strength);
@@ -88,8 +89,8 @@ TEST(Fracture, TimeAveragedStressIgnoresASpike) {
   StressHistory spike(m.num_tets(), 0.01), sustained(m.num_tets(), 0.01);
   spike.update(load, 0.001);
   for (int i = 0; i < 30; ++i) sustained.update(load, 0.001);
-  const FractureResult a = fracture_with_stress(m, m.positions, analyze_stresses(spike.averaged()), glass, options);
-  const FractureResult b = fracture_with_stress(m, m.positions, analyze_stresses(sustained.averaged()), glass, options);
+  const FractureResult a = fracture_with_stress(m, make_fem_model(m, glass, ModelKind::stvk), m.positions, analyze_stresses(spike.averaged()), options);
+  const FractureResult b = fracture_with_stress(m, make_fem_model(m, glass, ModelKind::stvk), m.positions, analyze_stresses(sustained.averaged()), options);
   EXPECT_TRUE(a.events.empty());
   ASSERT_EQ(b.events.size(), 1u);
   EXPECT_EQ(b.fragments.size(), 2u);
@@ -107,7 +108,7 @@ TEST(Fracture, DeterministicAcrossRunsAndThreads) {
   std::uint64_t hashes[3];
   for (int run = 0; run < 3; ++run) {
     set_num_threads(run == 0 ? 1 : 2);
-    const FractureResult r = fracture(m, x, glass, ModelKind::stvk, options);
+    const FractureResult r = fracture(m, make_fem_model(m, glass, ModelKind::stvk), x, options);
     EXPECT_GE(r.events.size(), 1u);
     Hasher h;
     h.add(test::mesh_hash(r.mesh));

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "shatter/core/random.h"
+#include "shatter/fem/fem_model.h"
 #include "shatter/fem/material.h"
 #include "shatter/fracture/plasticity.h"
 #include "shatter/fracture/stress.h"
@@ -20,6 +21,7 @@ Material soft_metal() {
   m.density = 8000;
   m.tensile_strength = 1e8;
   m.yield_stress = 1e6;
+  m.fracture_toughness = kInfinity;
   return m;
 }
 
@@ -35,8 +37,8 @@ TEST(Plasticity, BelowYieldSpringsBack) {
   const double eps = 0.9 * mat.yield_stress / mat.youngs_modulus;  // uniaxial: sigma = E eps < yield
   const Mat3 F = Vec3(1 + eps, 1 - mat.poisson_ratio * eps, 1 - mat.poisson_ratio * eps).asDiagonal();
   const auto x = affine(m, F);
-  const auto stress = compute_stresses(m, x, mat, ModelKind::linear);
-  const PlasticResult r = apply_plasticity(m, x, stress, mat, {});
+  const auto stress = compute_stresses(make_fem_model(m, mat, ModelKind::linear), x);
+  const PlasticResult r = apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, x, stress, {});
   EXPECT_TRUE(r.yielded.empty());
   EXPECT_TRUE(r.moved_nodes.empty());
   EXPECT_EQ(r.rest_positions, m.positions);
@@ -53,9 +55,9 @@ TEST(Plasticity, PastYieldKeepsAPermanentSet) {
   const auto x = affine(m, F);
   const auto xr = affine(m, R * F, Vec3(5, -3, 2));
   const PlasticityOptions options{.creep = 0.5};
-  const PlasticResult a = apply_plasticity(m, x, compute_stresses(m, x, mat, ModelKind::linear), mat, {}, options);
-  const PlasticResult b = apply_plasticity(m, xr, compute_stresses(m, xr, mat, ModelKind::corotated), mat, {}, options);
-  const PlasticResult c = apply_plasticity(m, x, compute_stresses(m, x, mat, ModelKind::corotated), mat, {}, options);
+  const PlasticResult a = apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, x, compute_stresses(make_fem_model(m, mat, ModelKind::linear), x), {}, options);
+  const PlasticResult b = apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, xr, compute_stresses(make_fem_model(m, mat, ModelKind::corotated), xr), {}, options);
+  const PlasticResult c = apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, x, compute_stresses(make_fem_model(m, mat, ModelKind::corotated), x), {}, options);
   ASSERT_EQ(a.yielded.size(), m.tets.size());
   ASSERT_EQ(b.yielded.size(), m.tets.size());
   // Uniform stress: every node gets w = creep (1 - sigma_y / sigma_vm); sigma_vm = E eps = 3 sigma_y.
@@ -74,14 +76,14 @@ TEST(Plasticity, PastYieldKeepsAPermanentSet) {
   // Unloading from the new rest shape: the stress at the same deformed shape is lower.
   TetMesh new_rest = m;
   new_rest.positions = a.rest_positions;
-  const auto after = compute_stresses(new_rest, x, mat, ModelKind::linear);
-  EXPECT_LT(after[0].von_mises, compute_stresses(m, x, mat, ModelKind::linear)[0].von_mises);
+  const auto after = compute_stresses(make_fem_model(new_rest, mat, ModelKind::linear), x);
+  EXPECT_LT(after[0].von_mises, compute_stresses(make_fem_model(m, mat, ModelKind::linear), x)[0].von_mises);
   // Repeated events accumulate plastic strain until the tets fail (ductile crack origins).
   std::vector<double> strain;
   int events = 0;
   PlasticResult r;
   do {
-    r = apply_plasticity(m, x, compute_stresses(m, x, mat, ModelKind::linear), mat, strain,
+    r = apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, x, compute_stresses(make_fem_model(m, mat, ModelKind::linear), x), strain,
                          {.creep = 0.5, .max_plastic_strain = 0.0105});
     strain = r.plastic_strain;
     ++events;
@@ -99,7 +101,7 @@ TEST(Plasticity, ElasticPartStaysPut) {
   std::vector<Vec3> x = m.positions;
   for (Vec3& p : x)
     if (p.x() > 2) p.x() += eps * (p.x() - 2);
-  const PlasticResult r = apply_plasticity(m, x, compute_stresses(m, x, mat, ModelKind::stvk), mat, {});
+  const PlasticResult r = apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, x, compute_stresses(make_fem_model(m, mat, ModelKind::stvk), x), {});
   ASSERT_FALSE(r.yielded.empty());
   EXPECT_LT((r.rotation - Mat3::Identity()).norm(), 1e-12);
   for (Index i = 0; i < m.num_nodes(); ++i) {
@@ -119,8 +121,8 @@ TEST(Plasticity, RestTetsStayPositive) {
   Random rng(3);
   std::vector<Vec3> x = m.positions;
   for (Vec3& p : x) p += rng.uniform_vec3(-0.4, 0.4);
-  const auto stress = compute_stresses(m, x, mat, ModelKind::stvk);
-  const PlasticResult r = apply_plasticity(m, x, stress, mat, {}, {.creep = 1.0, .min_volume_fraction = 0.2});
+  const auto stress = compute_stresses(make_fem_model(m, mat, ModelKind::stvk), x);
+  const PlasticResult r = apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, x, stress, {}, {.creep = 1.0, .min_volume_fraction = 0.2});
   EXPECT_FALSE(r.moved_nodes.empty());
   for (Index e = 0; e < m.num_tets(); ++e) {
     const TetIndices& t = m.tets[e];

@@ -6,7 +6,7 @@
 
 #include "shatter/fem/fem_model.h"
 #include "shatter/mesh/generate.h"
-#include "shatter/solve/assembly.h"
+#include "shatter/fem/assembly.h"
 
 namespace shatter::test {
 

@@ -9,7 +9,7 @@
 #include "shatter/core/parallel.h"
 #include "shatter/core/random.h"
 #include "shatter/fem/fem_model.h"
-#include "shatter/solve/assembly.h"
+#include "shatter/fem/assembly.h"
 #include "shatter/solve/linear_solvers.h"
 #include "solve_test_util.h"
 #include "support/test_support.h"

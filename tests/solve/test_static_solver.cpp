@@ -2,9 +2,12 @@
 // convergence, load stepping, determinism across thread counts, and no NaN on bad input.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "shatter/core/parallel.h"
 #include "shatter/solve/static_solver.h"
@@ -347,5 +350,80 @@ TEST(StaticSolver, NaNNeverEscapes) {
   EXPECT_FALSE(solve_static(model, bar.problem, x).ok());
 }
 
+
+// Every way a solve ends has its own status, converged == (status == converged), and a message
+// exactly when it did not converge.
+TEST(StaticSolver, StatusNamesTheOutcome) {
+  Bar bar = make_bar(1e5, {3, 1, 1});
+  const FemModel model = make_fem_model(bar.mesh, test::test_material(), ModelKind::stvk);
+  auto expect_status = [&](const FemModel& m, const StaticProblem& p, const StaticSolverOptions& options,
+                           SolveStatus expected) {
+    std::vector<Vec3> x = bar.mesh.positions;
+    const Result<StaticReport> r = solve_static(m, p, x, options);
+    EXPECT_TRUE(r.ok());
+    if (!r.ok()) return StaticReport{};
+    EXPECT_STREQ(to_string(r->status), to_string(expected)) << r->message;
+    EXPECT_EQ(r->converged, r->status == SolveStatus::converged) << r->message;
+    EXPECT_EQ(r->converged, r->message.empty()) << r->message;
+    for (const Vec3& q : x) EXPECT_TRUE(q.allFinite()) << r->message;
+    return *r;
+  };
+  const StaticSolverOptions defaults;
+  expect_status(model, bar.problem, defaults, SolveStatus::converged);
+  StaticProblem unloaded = bar.problem;  // already in equilibrium
+  unloaded.external_forces.clear();
+  expect_status(model, unloaded, defaults, SolveStatus::converged);
+
+  StaticProblem p = bar.problem;
+  p.external_forces[3].y() = std::numeric_limits<double>::quiet_NaN();
+  expect_status(model, p, defaults, SolveStatus::invalid_input);
+  FemModel bad = model;
+  bad.lame.mu = std::numeric_limits<double>::quiet_NaN();
+  expect_status(bad, bar.problem, defaults, SolveStatus::invalid_input);
+  // Finite forces whose squares overflow: the load as a whole is not finite.
+  p = bar.problem;
+  for (Vec3& f : p.external_forces) f *= 1e200;
+  expect_status(model, p, defaults, SolveStatus::invalid_input);
+
+  // Prescribed anchor positions so far away that the internal forces overflow.
+  p = unloaded;
+  p.anchor_positions = bar.mesh.positions;
+  for (std::size_t v = 0; v < p.anchors.size(); ++v)
+    if (p.anchors[v] != anchor_none) p.anchor_positions[v].x() += 1e300;
+  expect_status(model, p, defaults, SolveStatus::not_finite);
+
+  // A failed load step reports the reason it failed for.
+  StaticSolverOptions options = defaults;
+  options.max_newton_iterations = 0;
+  options.max_load_halvings = 0;
+  const StaticReport stuck = expect_status(model, bar.problem, options, SolveStatus::no_convergence);
+  EXPECT_EQ(stuck.load_fraction, 0.0);
+  EXPECT_NE(stuck.message.find("load step failed"), std::string::npos) << stuck.message;
+
+  // PCG allowed no iteration: a zero step.
+  options = defaults;
+  options.linear.max_iterations = 0;
+  options.max_load_halvings = 0;
+  expect_status(model, bar.problem, options, SolveStatus::linear_solve_failed);
+
+  // Without PSD projection and line search, a hard compression: the full step raises the energy.
+  options = defaults;
+  options.line_search = false;
+  options.project_psd = false;
+  options.max_load_halvings = 0;
+  p = bar.problem;
+  for (Vec3& f : p.external_forces) f *= -1e4;
+  expect_status(model, p, options, SolveStatus::line_search_failed);
+
+  std::vector<std::string> names;
+  for (SolveStatus status : {SolveStatus::converged, SolveStatus::invalid_input, SolveStatus::not_finite,
+                             SolveStatus::no_convergence, SolveStatus::line_search_failed,
+                             SolveStatus::linear_solve_failed}) {
+    const std::string name = to_string(status);
+    EXPECT_NE(name, "?");
+    EXPECT_EQ(std::count(names.begin(), names.end(), name), 0) << name;
+    names.push_back(name);
+  }
+}
 }  // namespace
 }  // namespace shatter

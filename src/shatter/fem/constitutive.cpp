@@ -9,7 +9,7 @@
 namespace shatter {
 namespace {
 
-// Green strain E = (F^T F - I) / 2 (method.md §2.1).
+// Green strain E = (F^T F - I) / 2 (docs/method.md §2.1).
 Mat3 green_strain(const Mat3& F) { return 0.5 * (F.transpose() * F - Mat3::Identity()); }
 
 // S = 2 mu E + lambda tr(E) I.

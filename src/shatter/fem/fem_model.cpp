@@ -84,7 +84,7 @@ typedef double Lanes __attribute__((vector_size(4 * sizeof(double))));
 namespace detail {
 
 // StVK forces of the tets [lo, hi) of one block (lo a multiple of 4) in their QR-rotated rest frames
-// (method.md §2.1-2.2, §3): F' = Ds R^-1, S' = 2 mu E' + lambda tr(E') I, H = V F' S' R^-T,
+// (docs/method.md §2.1-2.2, §3): F' = Ds R^-1, S' = 2 mu E' + lambda tr(E') I, H = V F' S' R^-T,
 // [f1 f2 f3] = H, f0 = -(f1 + f2 + f3); added into the block's slots in tet order.
 __attribute__((target_clones("avx2", "default")))
 void stvk_forces_block(const double* packed, const TetIndices* tets, const std::int32_t* corner_slot,
@@ -190,6 +190,20 @@ void set_tet_rest(FemModel& model, Index e, const Mat34& rest_corners) {
   store_fast_rest(model, static_cast<std::size_t>(e));
 }
 
+void update_rest_shape(FemModel& model, const std::vector<Vec3>& rest_positions,
+                       const std::vector<Index>& moved_nodes) {
+  SHATTER_CHECK(static_cast<Index>(rest_positions.size()) == model.num_nodes);
+  std::vector<char> moved(rest_positions.size(), 0);
+  for (Index i : moved_nodes) moved[static_cast<std::size_t>(i)] = 1;
+  for (Index e = 0; e < model.num_tets(); ++e) {
+    const TetIndices& t = model.tets[static_cast<std::size_t>(e)];
+    if (!moved[t[0]] && !moved[t[1]] && !moved[t[2]] && !moved[t[3]]) continue;
+    Mat34 corners;
+    for (int k = 0; k < 4; ++k) corners.col(k) = rest_positions[static_cast<std::size_t>(t[k])];
+    set_tet_rest(model, e, corners);
+  }
+}
+
 void internal_forces_reference(const FemModel& model, const std::vector<Vec3>& x, std::vector<Vec3>& f) {
   SHATTER_CHECK(static_cast<Index>(x.size()) == model.num_nodes);
   f.assign(x.size(), Vec3::Zero());
@@ -203,11 +217,17 @@ void internal_forces_reference(const FemModel& model, const std::vector<Vec3>& x
 }
 
 void internal_forces(const FemModel& model, const std::vector<Vec3>& x, std::vector<Vec3>& f) {
+  ForceWorkspace workspace;
+  internal_forces(model, x, f, workspace);
+}
+
+void internal_forces(const FemModel& model, const std::vector<Vec3>& x, std::vector<Vec3>& f,
+                     ForceWorkspace& workspace) {
   SHATTER_CHECK(static_cast<Index>(x.size()) == model.num_nodes);
   const FastTetData& fd = model.fast;
   const std::int64_t n_tets = model.num_tets();
   const std::int64_t n_blocks = static_cast<std::int64_t>(fd.block_slot_begin.size()) - 1;
-  thread_local std::vector<double> scratch;  // 3 doubles per slot, N
+  std::vector<double>& scratch = workspace.slots;  // 3 doubles per slot, N
   const std::size_t n_slots = static_cast<std::size_t>(fd.block_slot_begin.back());
   if (scratch.size() < 3 * n_slots) scratch.resize(3 * n_slots);
   double* acc = scratch.data();

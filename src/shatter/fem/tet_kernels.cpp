@@ -1,4 +1,4 @@
-// Constant-strain tet kernels (method.md §2.2-2.3) and stress analysis helpers.
+// Constant-strain tet kernels (docs/method.md §2.2-2.3) and stress analysis helpers.
 #include "shatter/fem/tet_kernels.h"
 
 #include <Eigen/Eigenvalues>
@@ -48,7 +48,7 @@ Mat34 tet_internal_forces(ModelKind kind, const Lame& lame, const TetRest& rest,
 
 namespace {
 
-// 3x3 blocks K_ij for StVK, from dP = dF S + F dS with dF = e_b g_j^T (method.md §2.3):
+// 3x3 blocks K_ij for StVK, from dP = dF S + F dS with dF = e_b g_j^T (docs/method.md §2.3):
 // K_ij = V [ (g_i^T S g_j) I + mu u_j u_i^T + mu (g_i . g_j) F F^T + lambda u_i u_j^T ],
 // with g_i = grad b_i and u_i = F g_i. K_ji = K_ij^T, so K is symmetric by construction.
 // The linear model is the case F = I, S = 0.

@@ -5,7 +5,7 @@
 #include <numbers>
 
 #include "shatter/core/assert.h"
-#include "shatter/fracture/adjacency.h"
+#include "shatter/mesh/topology.h"
 
 namespace shatter {
 namespace {

@@ -7,7 +7,7 @@
 #include <span>
 
 #include "shatter/core/assert.h"
-#include "shatter/fracture/adjacency.h"
+#include "shatter/mesh/topology.h"
 #include "shatter/mesh/topology.h"
 
 namespace shatter {

@@ -1,3 +1,4 @@
+// Stresses, plasticity, cracks and fragments of one body in one call (see fracture.h).
 #include "shatter/fracture/fracture.h"
 
 #include <numeric>
@@ -7,19 +8,19 @@
 
 namespace shatter {
 
-FractureResult fracture(const TetMesh& rest, const std::vector<Vec3>& deformed, const Material& material,
-                        ModelKind model, const FractureOptions& options) {
-  return fracture_with_stress(rest, deformed, compute_stresses(rest, deformed, material, model), material,
-                              options);
+FractureResult fracture(const TetMesh& rest, const FemModel& model, const std::vector<Vec3>& deformed,
+                        const FractureOptions& options) {
+  return fracture_with_stress(rest, model, deformed, compute_stresses(model, deformed), options);
 }
 
-FractureResult fracture_with_stress(const TetMesh& rest, const std::vector<Vec3>& deformed,
-                                    std::vector<TetStress> stress, const Material& material,
-                                    const FractureOptions& options) {
+FractureResult fracture_with_stress(const TetMesh& rest, const FemModel& model, const std::vector<Vec3>& deformed,
+                                    std::vector<TetStress> stress, const FractureOptions& options) {
   SHATTER_CHECK(deformed.size() == rest.positions.size() && stress.size() == rest.tets.size());
+  SHATTER_CHECK(model.num_tets() == rest.num_tets() && model.num_nodes == rest.num_nodes());
+  const Material& material = model.material;
   FractureResult r;
   r.stress = std::move(stress);
-  r.plastic = apply_plasticity(rest, deformed, r.stress, material, options.plastic_strain, options.plasticity);
+  r.plastic = apply_plasticity(model, rest.positions, deformed, r.stress, options.plastic_strain, options.plasticity);
   r.mesh = rest;
   r.mesh.positions = r.plastic.rest_positions;
   r.deformed = deformed;

@@ -1,3 +1,4 @@
+// Plastic rest-shape update (see plasticity.h).
 #include "shatter/fracture/plasticity.h"
 
 #include <Eigen/LU>
@@ -9,15 +10,18 @@
 
 namespace shatter {
 
-PlasticResult apply_plasticity(const TetMesh& rest, const std::vector<Vec3>& deformed,
-                               const std::vector<TetStress>& stress, const Material& material,
+PlasticResult apply_plasticity(const FemModel& model, const std::vector<Vec3>& rest_positions,
+                               const std::vector<Vec3>& deformed, const std::vector<TetStress>& stress,
                                const std::vector<double>& plastic_strain, const PlasticityOptions& options) {
-  const Index nn = rest.num_nodes();
-  const Index nt = rest.num_tets();
-  SHATTER_CHECK(deformed.size() == rest.positions.size() && stress.size() == rest.tets.size());
-  SHATTER_CHECK(plastic_strain.empty() || plastic_strain.size() == rest.tets.size());
+  const Index nn = model.num_nodes;
+  const Index nt = model.num_tets();
+  const Material& material = model.material;
+  const std::vector<TetIndices>& tets = model.tets;
+  SHATTER_CHECK(static_cast<Index>(rest_positions.size()) == nn && deformed.size() == rest_positions.size());
+  SHATTER_CHECK(static_cast<Index>(stress.size()) == nt);
+  SHATTER_CHECK(plastic_strain.empty() || static_cast<Index>(plastic_strain.size()) == nt);
   PlasticResult r;
-  r.rest_positions = rest.positions;
+  r.rest_positions = rest_positions;
   r.plastic_strain = plastic_strain.empty() ? std::vector<double>(nt, 0.0) : plastic_strain;
   const double yield = material.yield_stress;
   if (!options.enabled || !std::isfinite(yield) || options.creep <= 0) return r;
@@ -38,10 +42,11 @@ PlasticResult apply_plasticity(const TetMesh& rest, const std::vector<Vec3>& def
   // (2) Best-fit rigid motion x ~ R m + t , weighted by the volume of the tets that stayed
   // elastic (an anchored part stays put), or of all tets if every tet yielded.
   std::vector<double> vol(nt), node_vol(nn, 0.0), fit_vol(nn, 0.0);
-  const bool all_yielded = r.yielded.size() == rest.tets.size();
+  const bool all_yielded = r.yielded.size() == tets.size();
   for (Index e = 0; e < nt; ++e) {
-    vol[e] = signed_volume(rest, e);
-    for (Index v : rest.tets[e]) {
+    const TetIndices& t = tets[e];
+    vol[e] = signed_volume(rest_positions[t[0]], rest_positions[t[1]], rest_positions[t[2]], rest_positions[t[3]]);
+    for (Index v : t) {
       node_vol[v] += vol[e];
       if (all_yielded || w_tet[e] == 0) fit_vol[v] += vol[e];
     }
@@ -50,7 +55,7 @@ PlasticResult apply_plasticity(const TetMesh& rest, const std::vector<Vec3>& def
   Vec3 cm = Vec3::Zero(), cx = Vec3::Zero();
   for (Index i = 0; i < nn; ++i) {
     wsum += fit_vol[i];
-    cm += fit_vol[i] * rest.positions[i];
+    cm += fit_vol[i] * rest_positions[i];
     cx += fit_vol[i] * deformed[i];
   }
   cm /= wsum;
@@ -59,7 +64,7 @@ PlasticResult apply_plasticity(const TetMesh& rest, const std::vector<Vec3>& def
   // affine deformation A = F exactly, so a pure stretch has R = I.
   Mat3 apq = Mat3::Zero(), aqq = Mat3::Zero();
   for (Index i = 0; i < nn; ++i) {
-    const Vec3 q = rest.positions[i] - cm;
+    const Vec3 q = rest_positions[i] - cm;
     apq += fit_vol[i] * (deformed[i] - cx) * q.transpose();
     aqq += fit_vol[i] * q * q.transpose();
   }
@@ -71,17 +76,17 @@ PlasticResult apply_plasticity(const TetMesh& rest, const std::vector<Vec3>& def
   std::vector<double> w(nn, 0.0);
   for (Index e = 0; e < nt; ++e)
     if (w_tet[e] > 0)
-      for (Index v : rest.tets[e]) w[v] += vol[e] * w_tet[e];
+      for (Index v : tets[e]) w[v] += vol[e] * w_tet[e];
   for (Index i = 0; i < nn; ++i) w[i] = node_vol[i] > 0 ? w[i] / node_vol[i] : 0.0;
 
   // (4)+(5) Move, keeping every rest tet above min_volume_fraction of its volume.
   for (int round = 0;; ++round) {
     for (Index i = 0; i < nn; ++i)
-      r.rest_positions[i] = w[i] > 0 ? Vec3(rest.positions[i] + w[i] * (unrotated(i) - rest.positions[i]))
-                                     : rest.positions[i];
+      r.rest_positions[i] = w[i] > 0 ? Vec3(rest_positions[i] + w[i] * (unrotated(i) - rest_positions[i]))
+                                     : rest_positions[i];
     bool bad = false;
     for (Index e = 0; e < nt; ++e) {
-      const TetIndices& t = rest.tets[e];
+      const TetIndices& t = tets[e];
       const double v = signed_volume(r.rest_positions[t[0]], r.rest_positions[t[1]], r.rest_positions[t[2]],
                                      r.rest_positions[t[3]]);
       if (v >= options.min_volume_fraction * vol[e]) continue;

@@ -1,3 +1,4 @@
+// Per-tet stress analysis (see stress.h).
 #include "shatter/fracture/stress.h"
 
 #include <cmath>
@@ -22,17 +23,14 @@ TetStress analyze_stress(const Mat3& sigma) {
   return s;
 }
 
-std::vector<TetStress> compute_stresses(const TetMesh& rest, const std::vector<Vec3>& deformed,
-                                        const Material& material, ModelKind model) {
-  SHATTER_CHECK(deformed.size() == rest.positions.size());
-  const Lame lame = lame_parameters(material);
-  std::vector<TetStress> out(rest.tets.size());
-  parallel_for(0, rest.num_tets(), [&](std::int64_t e) {
-    const Index t = static_cast<Index>(e);
+std::vector<TetStress> compute_stresses(const FemModel& model, const std::vector<Vec3>& deformed) {
+  SHATTER_CHECK(static_cast<Index>(deformed.size()) == model.num_nodes);
+  std::vector<TetStress> out(model.tets.size());
+  parallel_for(0, model.num_tets(), [&](std::int64_t e) {
+    const auto t = static_cast<std::size_t>(e);
     Mat34 x;
-    for (int k = 0; k < 4; ++k) x.col(k) = deformed[rest.tets[t][k]];
-    const TetRest r = tet_rest(rest.corners(t));
-    out[t] = analyze_stress(cauchy_stress(model, lame, deformation_gradient(r, x)));
+    for (int k = 0; k < 4; ++k) x.col(k) = deformed[static_cast<std::size_t>(model.tets[t][k])];
+    out[t] = analyze_stress(cauchy_stress(model.model, model.lame, deformation_gradient(model.rest[t], x)));
   }, 512);
   return out;
 }

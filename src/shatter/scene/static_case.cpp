@@ -10,8 +10,8 @@
 #include <limits>
 
 #include "shatter/core/file_io.h"
+#include "shatter/core/json_reader.h"
 #include "shatter/mesh/topology.h"
-#include "shatter/scene/json_reader.h"
 
 namespace shatter {
 namespace {
@@ -184,9 +184,11 @@ Result<Material> read_material(const Json& value, const Where& where) {
   if (!r.status().ok())
     return where.error("expected a preset name (a string) or an object with material values, got " +
                        json_input::type_name(value));
+  // Without a preset only what the file gives counts: the strengths and toughness start unknown.
   Material m;
   m.tensile_strength = kInfinity;
   m.yield_stress = kInfinity;
+  m.fracture_toughness = kInfinity;
   bool from_preset = false;
   if (const Json* jp = r.get("preset")) {
     SHATTER_TRY(name, json_input::read_string(*jp, where.key("preset")));
@@ -429,55 +431,6 @@ Error case_error(const StaticCase& c, const std::string& field, std::string mess
   return e;
 }
 
-// Lumped boundary area of each selected node: each boundary triangle whose three corners are all
-// selected gives a third of its area to each corner.
-std::vector<double> lumped_area(const TetMesh& mesh, const std::vector<Index>& nodes) {
-  std::vector<char> selected(static_cast<std::size_t>(mesh.num_nodes()), 0);
-  for (Index i : nodes) selected[static_cast<std::size_t>(i)] = 1;
-  const TetFaces faces = compute_faces(mesh);
-  std::vector<double> area_of_node(static_cast<std::size_t>(mesh.num_nodes()), 0.0);
-  for (Index f = 0; f < faces.num_faces(); ++f) {
-    if (!faces.is_boundary(f)) continue;
-    const TriIndices& t = faces.faces[f];
-    if (!selected[t[0]] || !selected[t[1]] || !selected[t[2]]) continue;
-    const Vec3& a = mesh.positions[t[0]];
-    const double area = 0.5 * (mesh.positions[t[1]] - a).cross(mesh.positions[t[2]] - a).norm();
-    for (Index v : t) area_of_node[static_cast<std::size_t>(v)] += area / 3.0;
-  }
-  std::vector<double> out;
-  out.reserve(nodes.size());
-  for (Index i : nodes) out.push_back(area_of_node[static_cast<std::size_t>(i)]);
-  return out;
-}
-
-// Can the held components stop every rigid motion of the nodes of one connected piece? The rows
-// of the held components of the rigid-motion basis (3 translations, 3 small rotations about the
-// piece's centre, lengths scaled by its size) must have rank 6.
-bool rigid_motion_held(const TetMesh& mesh, const std::vector<Index>& piece_nodes,
-                       const std::vector<std::uint8_t>& held) {
-  Aabb box;
-  for (Index i : piece_nodes) box.extend(mesh.positions[i]);
-  const Vec3 centre = 0.5 * (box.min + box.max);
-  const double scale = std::max(box.extent().norm(), std::numeric_limits<double>::min());
-  Eigen::Matrix<double, 6, 6> gram = Eigen::Matrix<double, 6, 6>::Zero();
-  for (Index i : piece_nodes) {
-    if (held[i] == 0) continue;
-    const Vec3 p = (mesh.positions[i] - centre) / scale;
-    // velocity of component c under motion (t, w): t_c + (w x p)_c
-    for (int c = 0; c < 3; ++c) {
-      if (!(held[i] & (1u << c))) continue;
-      Eigen::Matrix<double, 6, 1> row = Eigen::Matrix<double, 6, 1>::Zero();
-      row[c] = 1.0;
-      const Vec3 e = Vec3::Unit(c);
-      const Vec3 rot = p.cross(e);  // (w x p)_c = w . (p x e_c)
-      row.tail<3>() = rot;
-      gram += row * row.transpose();
-    }
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(gram, Eigen::EigenvaluesOnly);
-  return eig.eigenvalues()[0] > 1e-12 * std::max(1.0, eig.eigenvalues()[5]);
-}
-
 }  // namespace
 
 Result<ResolvedStaticCase> resolve_static_case(const StaticCase& c, const TetMesh& mesh) {
@@ -508,7 +461,7 @@ Result<ResolvedStaticCase> resolve_static_case(const StaticCase& c, const TetMes
       const Vec3 share = l.force / static_cast<double>(nodes->size());
       for (Index i : *nodes) out.forces[i] += share;
     } else {
-      const std::vector<double> area = lumped_area(mesh, *nodes);
+      const std::vector<double> area = lumped_boundary_area(mesh, *nodes);
       double total = 0;
       for (double a : area) total += a;
       if (!(total > 0))
@@ -529,7 +482,7 @@ Result<ResolvedStaticCase> resolve_static_case(const StaticCase& c, const TetMes
   for (std::size_t i = 0; i < n; ++i)
     if (piece_of_node[i] >= 0) piece_nodes[piece_of_node[i]].push_back(static_cast<Index>(i));
   for (Index p = 0; p < comps.count; ++p) {
-    if (rigid_motion_held(mesh, piece_nodes[p], out.held)) continue;
+    if (holds_rigid_motion(mesh, piece_nodes[p], out.held)) continue;
     const Index first = piece_nodes[p].empty() ? 0 : piece_nodes[p].front();
     std::string where = comps.count > 1 ? "the mesh piece containing node " + std::to_string(mesh.node_id(first))
                                         : "the mesh";

@@ -5,13 +5,18 @@
 #include <ostream>
 
 #include "shatter/core/file_io.h"
-#include "shatter/fem/tet_kernels.h"
+#include "shatter/fracture/stress.h"
 #include "shatter/mesh/io/mesh_io.h"
 
 namespace shatter {
 
 StaticResults compute_static_results(const FemModel& model, const TetMesh& rest_mesh,
                                      const std::vector<Vec3>& x) {
+  return compute_static_results(model, rest_mesh, x, compute_stresses(model, x));
+}
+
+StaticResults compute_static_results(const FemModel& model, const TetMesh& rest_mesh,
+                                     const std::vector<Vec3>& x, const std::vector<TetStress>& stress) {
   SHATTER_CHECK(x.size() == rest_mesh.positions.size());
   SHATTER_CHECK(model.num_tets() == rest_mesh.num_tets());
   StaticResults r;
@@ -25,24 +30,21 @@ StaticResults compute_static_results(const FemModel& model, const TetMesh& rest_
       r.max_displacement_node = static_cast<Index>(i);
     }
   }
-  const auto m = static_cast<std::size_t>(model.num_tets());
+  SHATTER_CHECK(static_cast<Index>(stress.size()) == model.num_tets());
+  const auto m = stress.size();
   r.stress.resize(m);
   r.max_principal.resize(m);
   r.max_direction.resize(m);
   r.von_mises.resize(m);
   for (std::size_t e = 0; e < m; ++e) {
-    Mat34 corners;
-    for (int k = 0; k < 4; ++k) corners.col(k) = x[model.tets[e][k]];
-    const Mat3 F = deformation_gradient(model.rest[e], corners);
-    const Mat3 sigma = cauchy_stress(model.model, model.lame, F);
-    const Principal p = principal_stresses(sigma);
-    r.stress[e] = sigma;
-    r.max_principal[e] = p.values[0];
-    r.max_direction[e] = p.vectors.col(0);
-    r.von_mises[e] = von_mises(sigma);
+    const TetStress& s = stress[e];
+    r.stress[e] = s.sigma;
+    r.max_principal[e] = s.principal[0];
+    r.max_direction[e] = s.directions.col(0);
+    r.von_mises[e] = s.von_mises;
     const auto ei = static_cast<Index>(e);
-    if (r.max_principal_tet < 0 || p.values[0] > r.max_principal_stress) {
-      r.max_principal_stress = p.values[0];
+    if (r.max_principal_tet < 0 || s.principal[0] > r.max_principal_stress) {
+      r.max_principal_stress = s.principal[0];
       r.max_principal_tet = ei;
     }
     if (r.max_von_mises_tet < 0 || r.von_mises[e] > r.max_von_mises) {

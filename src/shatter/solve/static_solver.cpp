@@ -1,4 +1,4 @@
-// Newton-Raphson for static equilibrium with line search and load stepping (method.md §2.3).
+// Newton-Raphson for static equilibrium with line search and load stepping (docs/method.md §2.3).
 // Only tets with a free corner are evaluated: the others never change the free nodes' balance.
 #include "shatter/solve/static_solver.h"
 
@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
+#include <utility>
 
 #include "shatter/core/parallel.h"
 #include "shatter/fem/tet_kernels.h"
@@ -35,10 +37,34 @@ bool held(AnchorMask m, int c) { return (m & (1u << c)) != 0; }
 constexpr std::int64_t kMinParallelForceTets = 2048;    // ~0.2 us per tet
 constexpr std::int64_t kMinParallelEnergyTets = 8192;   // ~0.05 us per tet
 
+// Armijo constant of the energy line search: a step must realise this fraction of the energy
+// decrease that the slope predicts.
+constexpr double kArmijo = 1e-4;
+
 std::string format_number(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.3g", v);
   return buf;
+}
+
+// Sizes of the inputs against the model: errors, not reports (the caller passed wrong arrays).
+Result<void> check_sizes(const FemModel& model, const StaticProblem& problem, const std::vector<Vec3>& x) {
+  const Index n = model.num_nodes;
+  const auto size_ok = [n](std::size_t s, bool may_be_empty) {
+    return (may_be_empty && s == 0) || s == static_cast<std::size_t>(n);
+  };
+  if (!size_ok(x.size(), false))
+    return field_error("x", "has " + std::to_string(x.size()) + " positions, the model " +
+                                std::to_string(n) + " nodes");
+  if (!size_ok(problem.anchors.size(), true))
+    return field_error("anchors", "needs one mask per node (" + std::to_string(n) + ") or none");
+  if (!size_ok(problem.anchor_positions.size(), true))
+    return field_error("anchor_positions", "needs one position per node (" + std::to_string(n) + ") or none");
+  if (!size_ok(problem.external_forces.size(), true))
+    return field_error("external_forces", "needs one force per node (" + std::to_string(n) + ") or none");
+  if (model.rest.size() != model.tets.size() || (problem.gravity && !size_ok(model.node_mass.size(), false)))
+    return field_error("model", "is inconsistent (rest data or masses do not match the mesh)");
+  return {};
 }
 
 }  // namespace
@@ -103,246 +129,294 @@ double StaticSolver::active_energy(const FemModel& model, const std::vector<Vec3
   }, 512, kMinParallelEnergyTets);
 }
 
-Result<StaticReport> StaticSolver::solve(const FemModel& model, const StaticProblem& problem,
-                                         std::vector<Vec3>& x) {
-  const auto t_start = Clock::now();
-  const Index n = model.num_nodes;
-  const auto size_ok = [n](std::size_t s, bool may_be_empty) {
-    return (may_be_empty && s == 0) || s == static_cast<std::size_t>(n);
-  };
-  if (!size_ok(x.size(), false))
-    return field_error("x", "has " + std::to_string(x.size()) + " positions, the model " +
-                                std::to_string(n) + " nodes");
-  if (!size_ok(problem.anchors.size(), true))
-    return field_error("anchors", "needs one mask per node (" + std::to_string(n) + ") or none");
-  if (!size_ok(problem.anchor_positions.size(), true))
-    return field_error("anchor_positions", "needs one position per node (" + std::to_string(n) + ") or none");
-  if (!size_ok(problem.external_forces.size(), true))
-    return field_error("external_forces", "needs one force per node (" + std::to_string(n) + ") or none");
-  if (model.rest.size() != model.tets.size() || (problem.gravity && !size_ok(model.node_mass.size(), false)))
-    return field_error("model", "is inconsistent (rest data or masses do not match the mesh)");
+/// How a step of a solve ended: converged (go on), or the failure and why.
+struct StaticSolver::Outcome {
+  SolveStatus status = SolveStatus::converged;
+  std::string message;  ///< why it failed ("" when converged)
+  [[nodiscard]] bool ok() const { return status == SolveStatus::converged; }
+};
 
-  StaticReport report;
-  auto finish = [&](std::string message) -> Result<StaticReport> {
-    report.message = std::move(message);
-    report.converged = report.message.empty();
-    report.total_ms = ms_since(t_start);
-    return report;
-  };
+/// What one solve() call shares between its steps: its inputs, the per-solve arrays and the report.
+struct StaticSolver::SolveState {
+  SolveState(const FemModel& fem_model, const StaticProblem& static_problem, std::vector<Vec3>& positions)
+      : model(fem_model), problem(static_problem), x(positions), n(fem_model.num_nodes) {}
 
-  // Non-finite input: report, leave x alone.
-  const std::vector<AnchorMask> anchors =
-      problem.anchors.empty() ? std::vector<AnchorMask>(static_cast<std::size_t>(n), anchor_none)
-                              : problem.anchors;
-  for (Index v = 0; v < n; ++v) {
-    if (!x[v].allFinite()) return finish("initial position of node " + std::to_string(v) + " is not finite");
-    if (!problem.external_forces.empty() && !problem.external_forces[v].allFinite())
-      return finish("external force on node " + std::to_string(v) + " is not finite");
-    if (!problem.anchor_positions.empty() && anchors[v] != anchor_none && !problem.anchor_positions[v].allFinite())
-      return finish("anchor position of node " + std::to_string(v) + " is not finite");
-  }
-  if (problem.gravity && !problem.gravity_vector.allFinite()) return finish("gravity is not finite");
-  if (!std::isfinite(model.lame.mu) || !std::isfinite(model.lame.lambda) || !(model.lame.mu > 0))
-    return finish("material is not valid (Lame constants " + std::to_string(model.lame.mu) + ", " +
-                  std::to_string(model.lame.lambda) + ")");
-  for (Index e = 0; e < model.num_tets(); ++e)
-    if (!(model.rest[e].volume > 0) || !model.rest[e].Dm_inv.allFinite())
-      return finish("tet " + std::to_string(e) + " has a degenerate rest shape");
-
-  {
-    const auto t = Clock::now();
-    update_pattern(model, anchors);
-    report.assembly_ms += ms_since(t);
-  }
-  const Index na = matrix_.num_active();
-  const std::vector<Index>& node_of_active = matrix_.node_of_active();
-
-  // Full load per node, N.
-  std::vector<Vec3> load(static_cast<std::size_t>(n), Vec3::Zero());
-  for (Index v = 0; v < n; ++v) {
-    if (!problem.external_forces.empty()) load[v] += problem.external_forces[v];
-    if (problem.gravity) load[v] += model.node_mass[v] * problem.gravity_vector;
-  }
-  // Held components move from their initial to their prescribed values with the load fraction.
-  const std::vector<Vec3> x_initial = x;
-  auto set_anchors = [&](double s) {
+  /// Held components move from their initial to their prescribed values with the load fraction s.
+  void set_anchors(double s) {
     if (problem.anchor_positions.empty()) return;
     for (Index v = 0; v < n; ++v)
       for (int c = 0; c < 3; ++c)
         if (held(anchors[v], c))
           x[v][c] = x_initial[v][c] + s * (problem.anchor_positions[v][c] - x_initial[v][c]);
-  };
-
-  Eigen::VectorXd r(3 * na), dx(3 * na);
-  double round_off = 0;  // estimated round-off in ||r|| at the last residual evaluation
-  auto residual = [&](double s) {  // r = s f_ext - F(x) on free components; returns ||r||
-    const auto t = Clock::now();
-    active_forces(model, x);
-    report.force_ms += ms_since(t);
-    double round_off_sq = 0;
-    for (Index a = 0; a < na; ++a) {
-      const Index v = node_of_active[a];
-      for (int c = 0; c < 3; ++c) {
-        if (held(anchors[v], c)) {
-          r[3 * a + c] = 0.0;
-          continue;
-        }
-        r[3 * a + c] = s * load[v][c] - force_[v][c];
-        round_off_sq += force_error_[v];
-      }
-    }
-    round_off = std::sqrt(round_off_sq);
-    return r.norm();
-  };
-
-  // Reference for the relative residual: the load on the free components, or with no load the
-  // imbalance that the prescribed anchors cause.
-  double reference = 0;
-  for (Index a = 0; a < na; ++a) {
-    const Index v = node_of_active[a];
-    for (int c = 0; c < 3; ++c)
-      if (!held(anchors[v], c)) reference += load[v][c] * load[v][c];
-  }
-  reference = std::sqrt(reference);
-  if (!std::isfinite(reference)) return finish("external load is not finite");
-  if (reference == 0) {
-    set_anchors(1.0);
-    reference = residual(0.0);
-    set_anchors(0.0);
-    if (!std::isfinite(reference)) {
-      x = x_initial;
-      return finish("internal forces are not finite at the prescribed anchor positions");
-    }
-    if (reference == 0) {  // already in equilibrium
-      set_anchors(1.0);
-      report.load_fraction = 1;
-      report.load_steps = 1;
-      return finish("");
-    }
   }
 
-  // One load step: Newton at load fraction s from the current x. Returns "" on success.
-  const double armijo = 1e-4;
-  auto newton = [&](double s) -> std::string {
-    set_anchors(s);
-    double energy = std::numeric_limits<double>::quiet_NaN();
-    std::vector<Vec3> x_trial;
-    double previous_rel = std::numeric_limits<double>::infinity();
-    for (int it = 0;; ++it) {
-      const double rel = residual(s) / reference;
-      report.relative_residual = rel;
-      if (!std::isfinite(rel)) return "internal forces are not finite";
-      if (rel <= options_.relative_residual_tolerance) return "";
-      // Round-off level: the residual is within the bound on its own evaluation error and the last
-      // Newton step no longer reduced it. No further step can do better in double precision (the
-      // positions carry small displacements of stiff bodies only to ~eps |x|).
-      if (rel <= round_off / reference && rel > 0.5 * previous_rel) return "";
-      if (it == options_.max_newton_iterations)
-        return "no convergence in " + std::to_string(it) + " Newton iterations (relative residual " +
-               format_number(rel) + ")";
-      previous_rel = rel;
-      {
-        const auto t = Clock::now();
-        assemble_stiffness(model, x, AssemblyOptions{.project_psd = options_.project_psd}, matrix_);
-        report.assembly_ms += ms_since(t);
-      }
-      // Inexact Newton: the linear residual need only be a tenth of what the Newton tolerance
-      // allows, ||K dx - r|| <= 0.1 tol reference (never tighter than the linear option).
-      LinearSolverOptions linear = options_.linear;
-      linear.relative_tolerance = std::max(
-          linear.relative_tolerance,
-          std::min(0.5, 0.1 * options_.relative_residual_tolerance / std::max(rel, 1e-300)));
-      const bool pcg = linear.kind != LinearSolverKind::direct_ldlt;
-      linear.warm_start = false;
-      if (pcg && it == 0 && options_.warm_start && first_step_.size() == r.size()) {
-        matrix_.multiply(first_step_, dx);
-        const double dkd = first_step_.dot(dx);
-        if (dkd > 0 && std::isfinite(dkd)) {
-          dx = (r.dot(first_step_) / dkd) * first_step_;
-          linear.warm_start = true;
-        }
-      }
-      linear_.set_options(linear);
-      const LinearSolveReport lin = linear_.solve(matrix_, r, dx);
-      if (it == 0 && dx.allFinite()) first_step_ = dx;
-      report.linear_solve_ms += lin.time_ms;
-      report.linear_iterations_total += lin.iterations;
-      ++report.newton_iterations;
-      // An unconverged PCG still gives a usable (inexact Newton) direction; a failed one does not.
-      if (!lin.converged && options_.linear.kind == LinearSolverKind::direct_ldlt)
-        return "linear solve failed: " + lin.message;
-      if (!dx.allFinite() || dx.squaredNorm() == 0.0) return "linear solve failed: " + lin.message;
-      // Energy line search on E(x) = U(x) - s f_ext^T x; dE/dx = -r, so the slope along dx is -r.dx.
-      const double slope = r.dot(dx);
-      if (!(slope > 0)) return "Newton direction is not a descent direction";
-      {
-        const auto t = Clock::now();
-        if (!std::isfinite(energy)) energy = active_energy(model, x);
-        report.force_ms += ms_since(t);
-      }
-      double work = 0;  // s f_ext . dx
-      for (Index a = 0; a < na; ++a)
-        for (int c = 0; c < 3; ++c) work += s * load[node_of_active[a]][c] * dx[3 * a + c];
-      double alpha = 1.0;
-      bool accepted = false;
-      for (int cut = 0; cut < 30; ++cut) {
-        x_trial = x;
-        for (Index a = 0; a < na; ++a) {
-          const Index v = node_of_active[a];
-          for (int c = 0; c < 3; ++c)
-            if (!held(anchors[v], c)) x_trial[v][c] += alpha * dx[3 * a + c];
-        }
-        const auto t = Clock::now();
-        const double trial_energy = active_energy(model, x_trial);
-        report.force_ms += ms_since(t);
-        const double change = (trial_energy - energy) - alpha * work;
-        // Round-off slack: energies of stiff materials at small strain carry ~1e-12 relative error.
-        const double slack = 1e-9 * (std::abs(energy) + std::abs(trial_energy));
-        if (std::isfinite(change) && change <= -armijo * alpha * slope + slack) {
-          x.swap(x_trial);
-          energy = trial_energy;
-          accepted = true;
-          break;
-        }
-        if (!options_.line_search) break;
-        alpha *= 0.5;
-        ++report.line_search_cuts;
-      }
-      if (!accepted) return "line search found no energy decrease";
-    }
-  };
+  /// The report with the outcome and the total time filled in.
+  Result<StaticReport> finish(Outcome outcome) {
+    report.status = outcome.status;
+    report.message = std::move(outcome.message);
+    report.converged = outcome.ok();
+    report.total_ms = ms_since(start);
+    return std::move(report);
+  }
 
+  const FemModel& model;
+  const StaticProblem& problem;
+  std::vector<Vec3>& x;              ///< the caller's positions, m (#nodes): the current iterate
+  const Index n;                     ///< #nodes
+  const Clock::time_point start = Clock::now();
+  std::vector<AnchorMask> anchors;   ///< held components per node (#nodes; problem.anchors, or none held)
+  std::vector<Vec3> x_initial;       ///< x as passed in, m (#nodes)
+  std::vector<Vec3> load;            ///< full external load per node, N (#nodes)
+  double reference = 0;              ///< what relative residuals divide by, N
+  Eigen::VectorXd r;                 ///< residual s f_ext - F(x), N (3 #active nodes; 0 on held components)
+  Eigen::VectorXd dx;                ///< Newton step, m (3 #active nodes)
+  double round_off = 0;              ///< estimated round-off in ||r|| at the last residual evaluation, N
+  double energy = std::numeric_limits<double>::quiet_NaN();  ///< U(x) of the active tets, J (NaN: not yet known)
+  std::vector<Vec3> x_trial;         ///< line-search trial positions, m (#nodes)
+  StaticReport report;
+};
+
+const char* to_string(SolveStatus status) {
+  switch (status) {
+    case SolveStatus::converged: return "converged";
+    case SolveStatus::invalid_input: return "invalid-input";
+    case SolveStatus::not_finite: return "not-finite";
+    case SolveStatus::no_convergence: return "no-convergence";
+    case SolveStatus::line_search_failed: return "line-search-failed";
+    case SolveStatus::linear_solve_failed: return "linear-solve-failed";
+  }
+  return "?";
+}
+
+Result<StaticReport> StaticSolver::solve(const FemModel& model, const StaticProblem& problem,
+                                         std::vector<Vec3>& x) {
+  SolveState st(model, problem, x);
+  if (Result<void> sizes = check_sizes(model, problem, x); !sizes.ok()) return std::move(sizes.error());
+  st.anchors = problem.anchors.empty() ? std::vector<AnchorMask>(static_cast<std::size_t>(st.n), anchor_none)
+                                       : problem.anchors;
+  if (Outcome input = check_inputs(st); !input.ok()) return st.finish(std::move(input));
+  if (std::optional<Outcome> early = prepare(st)) return st.finish(std::move(*early));
+
+  // Load stepping: a failed step restarts from the last equilibrium at half the step size.
   double done = 0;
   const int increments = std::max(1, options_.load_increments);
   double step = 1.0 / increments;
   int halvings = 0;
   std::vector<Vec3> x_good = x;
-  std::string failure;
+  Outcome failure;
   while (done < 1.0) {
     const double target = std::min(1.0, done + step);
-    const std::string why = newton(target >= 1.0 - 1e-12 ? 1.0 : target);
-    if (why.empty()) {
-      done = target >= 1.0 - 1e-12 ? 1.0 : target;
-      ++report.load_steps;
+    // Snap to the full load when the summed steps fall short of it only by round-off.
+    const double s = target >= 1.0 - 1e-12 ? 1.0 : target;
+    Outcome why = newton_load_step(st, s);
+    if (why.ok()) {
+      done = s;
+      ++st.report.load_steps;
       x_good = x;
       continue;
     }
     x = x_good;
     if (halvings >= options_.max_load_halvings) {
-      failure = why;
+      failure = std::move(why);
       break;
     }
     ++halvings;
     step *= 0.5;
   }
-  report.load_fraction = done;
-  if (!failure.empty()) {
-    // Residual at the returned x against the full load.
-    report.relative_residual = residual(1.0) / reference;
-    return finish("load step failed at load fraction " + std::to_string(done) + " after " +
-                  std::to_string(halvings) + " halvings: " + failure);
+  st.report.load_fraction = done;
+  if (failure.ok()) return st.finish({});
+  // Residual at the returned x against the full load.
+  st.report.relative_residual = residual(st, 1.0) / st.reference;
+  return st.finish({failure.status, "load step failed at load fraction " + std::to_string(done) + " after " +
+                                        std::to_string(halvings) + " halvings: " + failure.message});
+}
+
+StaticSolver::Outcome StaticSolver::check_inputs(const SolveState& st) {
+  // Non-finite input: report, leave x alone.
+  const FemModel& model = st.model;
+  const StaticProblem& problem = st.problem;
+  const auto invalid = [](std::string message) { return Outcome{SolveStatus::invalid_input, std::move(message)}; };
+  for (Index v = 0; v < st.n; ++v) {
+    if (!st.x[v].allFinite()) return invalid("initial position of node " + std::to_string(v) + " is not finite");
+    if (!problem.external_forces.empty() && !problem.external_forces[v].allFinite())
+      return invalid("external force on node " + std::to_string(v) + " is not finite");
+    if (!problem.anchor_positions.empty() && st.anchors[v] != anchor_none && !problem.anchor_positions[v].allFinite())
+      return invalid("anchor position of node " + std::to_string(v) + " is not finite");
   }
-  return finish("");
+  if (problem.gravity && !problem.gravity_vector.allFinite()) return invalid("gravity is not finite");
+  if (!std::isfinite(model.lame.mu) || !std::isfinite(model.lame.lambda) || !(model.lame.mu > 0))
+    return invalid("material is not valid (Lame constants " + std::to_string(model.lame.mu) + ", " +
+                   std::to_string(model.lame.lambda) + ")");
+  for (Index e = 0; e < model.num_tets(); ++e)
+    if (!(model.rest[e].volume > 0) || !model.rest[e].Dm_inv.allFinite())
+      return invalid("tet " + std::to_string(e) + " has a degenerate rest shape");
+  return {};
+}
+
+std::optional<StaticSolver::Outcome> StaticSolver::prepare(SolveState& st) {
+  {
+    const auto t = Clock::now();
+    update_pattern(st.model, st.anchors);
+    st.report.assembly_ms += ms_since(t);
+  }
+  // Full load per node, N.
+  st.load.assign(static_cast<std::size_t>(st.n), Vec3::Zero());
+  for (Index v = 0; v < st.n; ++v) {
+    if (!st.problem.external_forces.empty()) st.load[v] += st.problem.external_forces[v];
+    if (st.problem.gravity) st.load[v] += st.model.node_mass[v] * st.problem.gravity_vector;
+  }
+  st.x_initial = st.x;
+  st.r.resize(3 * matrix_.num_active());
+  st.dx.resize(3 * matrix_.num_active());
+  return set_reference(st);
+}
+
+std::optional<StaticSolver::Outcome> StaticSolver::set_reference(SolveState& st) {
+  // Reference for the relative residual: the load on the free components, or with no load the
+  // imbalance that the prescribed anchors cause.
+  const std::vector<Index>& node_of_active = matrix_.node_of_active();
+  double reference = 0;
+  for (Index a = 0; a < matrix_.num_active(); ++a) {
+    const Index v = node_of_active[a];
+    for (int c = 0; c < 3; ++c)
+      if (!held(st.anchors[v], c)) reference += st.load[v][c] * st.load[v][c];
+  }
+  st.reference = std::sqrt(reference);
+  if (!std::isfinite(st.reference)) return Outcome{SolveStatus::invalid_input, "external load is not finite"};
+  if (st.reference != 0) return std::nullopt;
+  st.set_anchors(1.0);
+  st.reference = residual(st, 0.0);
+  st.set_anchors(0.0);
+  if (!std::isfinite(st.reference)) {
+    st.x = st.x_initial;
+    return Outcome{SolveStatus::not_finite, "internal forces are not finite at the prescribed anchor positions"};
+  }
+  if (st.reference == 0) {  // already in equilibrium
+    st.set_anchors(1.0);
+    st.report.load_fraction = 1;
+    st.report.load_steps = 1;
+    return Outcome{};
+  }
+  return std::nullopt;
+}
+
+double StaticSolver::residual(SolveState& st, double s) {
+  const auto t = Clock::now();
+  active_forces(st.model, st.x);
+  st.report.force_ms += ms_since(t);
+  const std::vector<Index>& node_of_active = matrix_.node_of_active();
+  double round_off_sq = 0;
+  for (Index a = 0; a < matrix_.num_active(); ++a) {
+    const Index v = node_of_active[a];
+    for (int c = 0; c < 3; ++c) {
+      if (held(st.anchors[v], c)) {
+        st.r[3 * a + c] = 0.0;
+        continue;
+      }
+      st.r[3 * a + c] = s * st.load[v][c] - force_[v][c];
+      round_off_sq += force_error_[v];
+    }
+  }
+  st.round_off = std::sqrt(round_off_sq);
+  return st.r.norm();
+}
+
+StaticSolver::Outcome StaticSolver::newton_load_step(SolveState& st, double s) {
+  st.set_anchors(s);
+  st.energy = std::numeric_limits<double>::quiet_NaN();
+  double previous_rel = std::numeric_limits<double>::infinity();
+  for (int it = 0;; ++it) {
+    const double rel = residual(st, s) / st.reference;
+    st.report.relative_residual = rel;
+    if (!std::isfinite(rel)) return {SolveStatus::not_finite, "internal forces are not finite"};
+    if (rel <= options_.relative_residual_tolerance) return {};
+    // Round-off level: the residual is within the bound on its own evaluation error and the last
+    // Newton step no longer reduced it. No further step can do better in double precision (the
+    // positions carry small displacements of stiff bodies only to ~eps |x|).
+    if (rel <= st.round_off / st.reference && rel > 0.5 * previous_rel) return {};
+    if (it == options_.max_newton_iterations)
+      return {SolveStatus::no_convergence, "no convergence in " + std::to_string(it) +
+                                               " Newton iterations (relative residual " + format_number(rel) + ")"};
+    previous_rel = rel;
+    if (Outcome direction = newton_direction(st, it, rel); !direction.ok()) return direction;
+    if (Outcome step = line_search(st, s); !step.ok()) return step;
+  }
+}
+
+StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iteration, double relative_residual) {
+  {
+    const auto t = Clock::now();
+    assemble_stiffness(st.model, st.x, AssemblyOptions{.project_psd = options_.project_psd}, matrix_);
+    st.report.assembly_ms += ms_since(t);
+  }
+  // Inexact Newton: the linear residual need only be a tenth of what the Newton tolerance
+  // allows, ||K dx - r|| <= 0.1 tol reference (never tighter than the linear option).
+  LinearSolverOptions linear = options_.linear;
+  linear.relative_tolerance = std::max(
+      linear.relative_tolerance,
+      std::min(0.5, 0.1 * options_.relative_residual_tolerance / std::max(relative_residual, 1e-300)));
+  const bool pcg = linear.kind != LinearSolverKind::direct_ldlt;
+  linear.warm_start = false;
+  if (pcg && iteration == 0 && options_.warm_start && first_step_.size() == st.r.size()) {
+    matrix_.multiply(first_step_, st.dx);
+    const double dkd = first_step_.dot(st.dx);
+    if (dkd > 0 && std::isfinite(dkd)) {
+      st.dx = (st.r.dot(first_step_) / dkd) * first_step_;
+      linear.warm_start = true;
+    }
+  }
+  linear_.set_options(linear);
+  const LinearSolveReport lin = linear_.solve(matrix_, st.r, st.dx);
+  if (iteration == 0 && st.dx.allFinite()) first_step_ = st.dx;
+  st.report.linear_solve_ms += lin.time_ms;
+  st.report.linear_iterations_total += lin.iterations;
+  ++st.report.newton_iterations;
+  // An unconverged PCG still gives a usable (inexact Newton) direction; a failed one does not.
+  if (!lin.converged && options_.linear.kind == LinearSolverKind::direct_ldlt)
+    return {SolveStatus::linear_solve_failed, "linear solve failed: " + lin.message};
+  if (!st.dx.allFinite() || st.dx.squaredNorm() == 0.0)
+    return {SolveStatus::linear_solve_failed, "linear solve failed: " + lin.message};
+  return {};
+}
+
+StaticSolver::Outcome StaticSolver::line_search(SolveState& st, double s) {
+  // Energy line search on E(x) = U(x) - s f_ext^T x; dE/dx = -r, so the slope along dx is -r.dx.
+  const double slope = st.r.dot(st.dx);
+  if (!(slope > 0)) return {SolveStatus::line_search_failed, "Newton direction is not a descent direction"};
+  {
+    const auto t = Clock::now();
+    if (!std::isfinite(st.energy)) st.energy = active_energy(st.model, st.x);
+    st.report.force_ms += ms_since(t);
+  }
+  const Index na = matrix_.num_active();
+  const std::vector<Index>& node_of_active = matrix_.node_of_active();
+  double work = 0;  // s f_ext . dx
+  for (Index a = 0; a < na; ++a)
+    for (int c = 0; c < 3; ++c) work += s * st.load[node_of_active[a]][c] * st.dx[3 * a + c];
+  double alpha = 1.0;
+  for (int cut = 0; cut < 30; ++cut) {
+    st.x_trial = st.x;
+    for (Index a = 0; a < na; ++a) {
+      const Index v = node_of_active[a];
+      for (int c = 0; c < 3; ++c)
+        if (!held(st.anchors[v], c)) st.x_trial[v][c] += alpha * st.dx[3 * a + c];
+    }
+    const auto t = Clock::now();
+    const double trial_energy = active_energy(st.model, st.x_trial);
+    st.report.force_ms += ms_since(t);
+    const double change = (trial_energy - st.energy) - alpha * work;
+    // Round-off slack: energies of stiff materials at small strain carry ~1e-12 relative error.
+    const double slack = 1e-9 * (std::abs(st.energy) + std::abs(trial_energy));
+    if (std::isfinite(change) && change <= -kArmijo * alpha * slope + slack) {
+      st.x.swap(st.x_trial);
+      st.energy = trial_energy;
+      return {};
+    }
+    if (!options_.line_search) break;
+    alpha *= 0.5;
+    ++st.report.line_search_cuts;
+  }
+  return {SolveStatus::line_search_failed, "line search found no energy decrease"};
 }
 
 Result<StaticReport> solve_static(const FemModel& model, const StaticProblem& problem,

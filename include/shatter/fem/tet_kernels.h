@@ -1,4 +1,4 @@
-// Constant-strain tetrahedron kernels (method.md §2.2-2.3) as pure functions of the rest data and the
+// Constant-strain tetrahedron kernels (docs/method.md §2.2-2.3) as pure functions of the rest data and the
 // deformed corners; stress analysis helpers (Cauchy stress, principal stresses, von Mises).
 #pragma once
 

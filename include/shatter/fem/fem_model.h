@@ -1,5 +1,5 @@
 // FemModel: what never changes during a solve (material, tets, rest data, masses, acceleration data)
-// and the global internal force / energy of a deformed state (method.md §2.2, eq. 12-13; §3).
+// and the global internal force / energy of a deformed state (docs/method.md §2.2, eq. 12-13; §3).
 #pragma once
 
 #include <cstdint>
@@ -49,16 +49,31 @@ struct FemModel {
 /// here (see validate_material).
 FemModel make_fem_model(const TetMesh& rest_mesh, const Material& material, ModelKind model);
 
-/// Replace the rest shape of tet e (plasticity: m := x, method.md §2.4): updates rest[e] and the
+/// Replace the rest shape of tet e (plasticity: m := x, docs/method.md §2.4): updates rest[e] and the
 /// fast path's data; node masses are kept (mass is conserved). Changing `tets` needs a new model.
 void set_tet_rest(FemModel& model, Index e, const Mat34& rest_corners);
+
+/// After a plastic update moved the rest positions of `moved_nodes` (docs/method.md §2.4): set_tet_rest
+/// for every tet with a moved corner, from `rest_positions` (m, #nodes). This is the one way a
+/// model follows a new rest shape in place; after a cut (new tets) build a new model instead.
+void update_rest_shape(FemModel& model, const std::vector<Vec3>& rest_positions,
+                       const std::vector<Index>& moved_nodes);
 
 /// Global internal force F(x) = sum_e F_e(x), N (#nodes), the straightforward way: per tet
 /// tet_internal_forces and a serial scatter-add in tet order. x: deformed positions, m (#nodes).
 void internal_forces_reference(const FemModel& model, const std::vector<Vec3>& x,
                                std::vector<Vec3>& f);
+/// Scratch memory of internal_forces: one force slot per (block, node of the block), 3 doubles each
+/// (N). Keep one per caller to avoid reallocating; its contents mean nothing between calls.
+struct ForceWorkspace {
+  std::vector<double> slots;
+};
+
 /// The same, fast: specialised inline code per model kind, compact rest data, multithreaded; the
 /// result does not depend on the thread count (bitwise) and equals the reference to round-off.
+void internal_forces(const FemModel& model, const std::vector<Vec3>& x, std::vector<Vec3>& f,
+                     ForceWorkspace& workspace);
+/// The same with a workspace of its own (allocated per call).
 void internal_forces(const FemModel& model, const std::vector<Vec3>& x, std::vector<Vec3>& f);
 /// Total elastic energy sum_e V_e psi(F_e), J (deterministic parallel sum).
 double total_energy(const FemModel& model, const std::vector<Vec3>& x);

@@ -1,8 +1,10 @@
 // Derived topology of a TetMesh: unique faces with the tets on each side, face adjacency,
-// the boundary surface as outward-oriented triangles, and connected components.
+// the boundary surface as outward-oriented triangles, connected components, and node-to-tet
+// incidence for local face queries.
 #pragma once
 
 #include <array>
+#include <span>
 #include <vector>
 
 #include "shatter/mesh/tet_mesh.h"
@@ -57,5 +59,20 @@ struct Components {
   Index count = 0;
 };
 Components connected_components(const TetMesh& mesh);
+
+struct NodeTets {
+  std::vector<Index> begin;  ///< CSR offsets (#nodes + 1)
+  std::vector<Index> tets;   ///< incident tets of each node, increasing
+  [[nodiscard]] std::span<const Index> of(Index v) const {
+    return {tets.data() + begin[v], static_cast<std::size_t>(begin[v + 1] - begin[v])};
+  }
+};
+
+/// Incident tets of every node (CSR), O(#tets): local face queries without a global face sort
+/// (crack regions, cutting).
+NodeTets node_tets(const TetMesh& mesh);
+
+/// The tet other than e that has the three nodes of e's local face k (opposite corner k), or -1.
+Index face_neighbor(const TetMesh& mesh, const NodeTets& incidence, Index e, int k);
 
 }  // namespace shatter

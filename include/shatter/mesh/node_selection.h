@@ -1,7 +1,9 @@
 // Selecting mesh nodes for anchors and loads: by file node id, by an axis-aligned box, by a plane
-// (with a distance tolerance) or by a named node set of the mesh file.
+// (with a distance tolerance) or by a named node set of the mesh file; the boundary area lumped at
+// selected nodes (to spread a load) and whether held node components stop every rigid motion.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -28,5 +30,16 @@ Result<std::vector<Index>> select_nodes(const TetMesh& mesh, const NodeSelector&
 
 /// Human-readable one-line description ("box [0 0 0]..[1 1 1]", "3 node ids").
 std::string describe(const NodeSelector& selector);
+
+/// Lumped boundary area of each of `nodes` (m^2, same order): each boundary triangle whose three
+/// corners are all among `nodes` gives a third of its area to each corner.
+std::vector<double> lumped_boundary_area(const TetMesh& mesh, const std::vector<Index>& nodes);
+
+/// Whether the held components `held` (#nodes; bit c = component c held, as AnchorMask) stop every
+/// rigid motion of the nodes `piece_nodes` (one connected piece): the rows of the held components
+/// of the rigid-motion basis (3 translations, 3 small rotations about the piece's centre, lengths
+/// scaled by its size) must have rank 6.
+bool holds_rigid_motion(const TetMesh& mesh, const std::vector<Index>& piece_nodes,
+                        const std::vector<std::uint8_t>& held);
 
 }  // namespace shatter

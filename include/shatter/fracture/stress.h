@@ -1,13 +1,11 @@
 // Per-tet stress analysis of a deformed state: Cauchy stress, principal stresses and directions, and
-// the signed display stress (method.md §2.5; tension positive).
+// the signed display stress (docs/method.md §2.5; tension positive).
 #pragma once
 
 #include <vector>
 
 #include "shatter/core/types.h"
-#include "shatter/fem/constitutive.h"
-#include "shatter/fem/material.h"
-#include "shatter/mesh/tet_mesh.h"
+#include "shatter/fem/fem_model.h"
 
 namespace shatter {
 
@@ -24,10 +22,11 @@ struct TetStress {
 /// Principal values, directions, display and von Mises stress of one Cauchy stress tensor.
 TetStress analyze_stress(const Mat3& sigma);
 
-/// Per tet of `rest` (#tets): the Cauchy stress of the deformed positions `deformed` (m, #nodes).
-/// Parallel over tets; the result does not depend on the thread count.
-std::vector<TetStress> compute_stresses(const TetMesh& rest, const std::vector<Vec3>& deformed,
-                                        const Material& material, ModelKind model);
+/// Per tet of the model (#tets): the Cauchy stress of the deformed positions `deformed` (m, #nodes)
+/// under the model's constitutive law and rest data, analysed as above. The one per-tet stress path:
+/// static results, fracture and plasticity all use it. Parallel over tets; the result does not
+/// depend on the thread count.
+std::vector<TetStress> compute_stresses(const FemModel& model, const std::vector<Vec3>& deformed);
 
 /// The same from given stress tensors (Pa, #tets), e.g. from another solver or a test field.
 std::vector<TetStress> analyze_stresses(const std::vector<Mat3>& sigma);

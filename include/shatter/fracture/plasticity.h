@@ -1,4 +1,4 @@
-// Plasticity from a static solution (method.md §2.4): tets whose von Mises stress exceeds the yield
+// Plasticity from a static solution (docs/method.md §2.4): tets whose von Mises stress exceeds the yield
 // stress let the rest shape absorb part of their deformation (dents); tets past a maximum plastic
 // strain become ductile crack origins (dents first, then tears).
 #pragma once
@@ -6,9 +6,8 @@
 #include <vector>
 
 #include "shatter/core/types.h"
-#include "shatter/fem/material.h"
+#include "shatter/fem/fem_model.h"
 #include "shatter/fracture/stress.h"
-#include "shatter/mesh/tet_mesh.h"
 
 namespace shatter {
 
@@ -33,15 +32,19 @@ struct PlasticResult {
   Mat3 rotation = Mat3::Identity();    ///< best-fit rotation removed from the deformed shape
 };
 
-/// One plastic event. `plastic_strain` is the accumulated strain per tet before it (empty: zeros).
-/// Steps: (1) yielded tets get w_e = creep (1 - sigma_y / sigma_vm) and a plastic strain increment
-/// w_e sigma_vm / E; (2) the best-fit rigid motion of deformed onto rest (the rotation of the
-/// best-fit affine map, as in shape matching, weighted by the volume of the tets that stayed elastic, or of all tets if all yielded) is removed; (3) each node's weight is the volume-weighted mean of w_e over its tets (0 for tets
-/// that did not yield); (4) rest_i += w_i (x_i - rest_i); (5) weights of nodes of any tet that
-/// would fall below min_volume_fraction of its volume are halved (and finally zeroed) until none
-/// does. Rebuild the FemModel from the new rest positions afterwards.
-PlasticResult apply_plasticity(const TetMesh& rest, const std::vector<Vec3>& deformed,
-                               const std::vector<TetStress>& stress, const Material& material,
+/// One plastic event of the body `model` (tets, material; its rest data is not read) whose rest
+/// positions are `rest_positions` (m, #nodes), deformed to `deformed` (m, #nodes) with per-tet
+/// stresses `stress` (#tets). `plastic_strain` is the accumulated strain per tet before it (empty:
+/// zeros). Steps: (1) yielded tets get w_e = creep (1 - sigma_y / sigma_vm) and a plastic strain
+/// increment w_e sigma_vm / E; (2) the best-fit rigid motion of deformed onto rest (the rotation of
+/// the best-fit affine map, as in shape matching, weighted by the volume of the tets that stayed
+/// elastic, or of all tets if all yielded) is removed; (3) each node's weight is the volume-weighted
+/// mean of w_e over its tets (0 for tets that did not yield); (4) rest_i += w_i (x_i - rest_i);
+/// (5) weights of nodes of any tet that would fall below min_volume_fraction of its volume are
+/// halved (and finally zeroed) until none does. Afterwards update the model's rest data with
+/// update_rest_shape (fem_model.h).
+PlasticResult apply_plasticity(const FemModel& model, const std::vector<Vec3>& rest_positions,
+                               const std::vector<Vec3>& deformed, const std::vector<TetStress>& stress,
                                const std::vector<double>& plastic_strain, const PlasticityOptions& options = {});
 
 }  // namespace shatter

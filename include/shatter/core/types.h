@@ -1,5 +1,5 @@
 // Small math and index types shared by every layer. FEM state is double precision: moduli of
-// 1e9..1e11 Pa with strains of 1e-4 need it (design.md).
+// 1e9..1e11 Pa with strains of 1e-4 need it (docs/architecture.md).
 #pragma once
 
 #include <Eigen/Core>
@@ -19,6 +19,7 @@ using Mat3 = Eigen::Matrix3d;
 using Mat4 = Eigen::Matrix4d;
 using Mat34 = Eigen::Matrix<double, 3, 4>;
 using Mat43 = Eigen::Matrix<double, 4, 3>;
+using Quat = Eigen::Quaterniond;  ///< unit quaternion for orientations
 using Mat12 = Eigen::Matrix<double, 12, 12>;
 using Vec12 = Eigen::Matrix<double, 12, 1>;
 

@@ -15,7 +15,7 @@
 #include "shatter/fem/material.h"
 #include "shatter/fracture/fracture.h"
 #include "shatter/mesh/tet_mesh.h"
-#include "shatter/scene/node_selection.h"
+#include "shatter/mesh/node_selection.h"
 #include "shatter/solve/static_solver.h"
 
 namespace shatter {

@@ -1,4 +1,4 @@
-// Crack planning by the maximum tensile stress criterion (method.md §2.5): crack origins, planes,
+// Crack planning by the maximum tensile stress criterion (docs/method.md §2.5): crack origins, planes,
 // radii and the tets each crack marks; a time-averaged stress state (after Bao et al. 2007) as a
 // less instantaneous criterion.
 #pragma once
@@ -9,7 +9,7 @@
 #include "shatter/fem/material.h"
 #include "shatter/fracture/stress.h"
 #include "shatter/mesh/tet_mesh.h"
-#include "shatter/fracture/adjacency.h"
+#include "shatter/mesh/topology.h"
 
 namespace shatter {
 

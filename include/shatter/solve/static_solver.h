@@ -1,16 +1,17 @@
-// Static equilibrium F(x) = f_ext on the free nodes by Newton-Raphson (method.md §2.3, the paper's
+// Static equilibrium F(x) = f_ext on the free nodes by Newton-Raphson (docs/method.md §2.3, the paper's
 // eq. 14-17), with PSD-projected element stiffness, an energy line search and load stepping.
 // StaticSolver keeps the sparse pattern and the symbolic factorization for repeated solves on the
 // same mesh and anchors (the simulator solves at every impact).
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "shatter/core/error.h"
 #include "shatter/core/types.h"
 #include "shatter/fem/fem_model.h"
-#include "shatter/solve/assembly.h"
+#include "shatter/fem/assembly.h"
 #include "shatter/solve/linear_solvers.h"
 
 namespace shatter {
@@ -52,8 +53,32 @@ struct StaticSolverOptions {
   LinearSolverOptions linear;
 };
 
+/// How a static solve ended (StaticReport::status). Every failure happens in a load step, which is
+/// retried at half the size (StaticSolverOptions::max_load_halvings); when the halvings run out the
+/// report carries the status of that last failure, not a separate "load step failed": the reason
+/// is what a caller can act on, and load_fraction < 1 with the message already says that load
+/// stepping gave up (and at which fraction).
+enum class SolveStatus {
+  converged,            ///< equilibrium within the tolerance (or at round-off level) at the full load
+  /// Rejected before any iteration, x left as passed in: a non-finite initial position, force,
+  /// anchor position, gravity or total load, invalid Lame constants, or a degenerate rest tet.
+  invalid_input,
+  /// Internal forces turned non-finite (overflow): at the prescribed anchor positions (x is then the
+  /// initial x) or during a load step.
+  not_finite,
+  no_convergence,       ///< max_newton_iterations reached without meeting the tolerance
+  /// The Newton step cannot lower the energy: not a descent direction (possible without PSD
+  /// projection), or no step length along it does.
+  line_search_failed,
+  /// The linear solve gave no usable step: a failed factorization, or a non-finite or zero step.
+  linear_solve_failed,
+};
+/// "converged", "invalid-input", "not-finite", "no-convergence", "line-search-failed",
+/// "linear-solve-failed".
+const char* to_string(SolveStatus status);
+
 struct StaticReport {
-  bool converged = false;
+  bool converged = false;           ///< status == SolveStatus::converged
   int newton_iterations = 0;        ///< Newton iterations over all load steps
   double relative_residual = 0;     ///< at the returned x, as in the tolerance
   int load_steps = 0;               ///< load steps completed
@@ -64,6 +89,7 @@ struct StaticReport {
   double linear_solve_ms = 0;       ///< linear solves (factorizations, PCG)
   double force_ms = 0;              ///< internal forces and energies
   double total_ms = 0;
+  SolveStatus status = SolveStatus::no_convergence;  ///< how it ended (a default report has not converged)
   std::string message;              ///< why it did not converge ("" when it did)
 };
 
@@ -77,8 +103,8 @@ class StaticSolver {
 
   /// x: initial guess (usually the rest positions), m (#nodes); receives the solution. Returns an
   /// error for inconsistent sizes; numerical trouble (non-finite input, no convergence) gives a
-  /// report with converged = false and a message, and x then holds the last equilibrium reached
-  /// (at a fraction of the load; at worst the initial x with the anchors applied), never NaN.
+  /// report with converged = false, a status and a message, and x then holds the last equilibrium
+  /// reached (at a fraction of the load; at worst the initial x with the anchors applied), never NaN.
   Result<StaticReport> solve(const FemModel& model, const StaticProblem& problem, std::vector<Vec3>& x);
 
   /// Times the sparse pattern was (re)built; stays put while tets and anchors do not change.
@@ -88,6 +114,26 @@ class StaticSolver {
   [[nodiscard]] const BlockSparseMatrix& matrix() const { return matrix_; }
 
  private:
+  struct Outcome;     ///< how a step of a solve ended: status and message (static_solver.cpp)
+  struct SolveState;  ///< what one solve() call shares between its steps (static_solver.cpp)
+
+  /// Non-finite input, invalid material, degenerate rest tets: invalid_input, or converged to go on.
+  static Outcome check_inputs(const SolveState& st);
+  /// Sparse pattern, full load, residual reference. A value ends the solve with that outcome (bad
+  /// load, or already in equilibrium); nullopt goes on to the load steps.
+  std::optional<Outcome> prepare(SolveState& st);
+  /// The reference that relative residuals divide by (part of prepare; same return convention).
+  std::optional<Outcome> set_reference(SolveState& st);
+  /// st.r = s f_ext - F(x) on the free components (0 on held ones) at load fraction s, and
+  /// st.round_off; returns ||st.r||, N.
+  double residual(SolveState& st, double s);
+  /// Newton iterations at load fraction s from the current x: converged, or why not.
+  Outcome newton_load_step(SolveState& st, double s);
+  /// Assembles K at x and solves K dx = r (inexactly with PCG) into st.dx.
+  Outcome newton_direction(SolveState& st, int iteration, double relative_residual);
+  /// Backtracking on the energy along st.dx; moves x to the accepted point.
+  Outcome line_search(SolveState& st, double s);
+
   void update_pattern(const FemModel& model, const std::vector<AnchorMask>& anchors);
   /// Internal forces of the active tets at x, summed into force_.
   void active_forces(const FemModel& model, const std::vector<Vec3>& x);

@@ -1,4 +1,4 @@
-// Sparse stiffness assembly for the static solver (method.md §2.3, the paper's eq. 26-28): the
+// Sparse stiffness assembly for the static solver (docs/method.md §2.3, the paper's eq. 26-28): the
 // 3x3-block pattern of the nodes with a free component, built once per (mesh, anchors) and
 // refilled in place at every Newton iteration, deterministically on any thread count.
 #pragma once
@@ -119,7 +119,7 @@ class BlockSparseMatrix {
 
 /// Options of the stiffness assembly.
 struct AssemblyOptions {
-  /// Make each element matrix positive semi-definite (method.md §2.3), so that Newton's system
+  /// Make each element matrix positive semi-definite (docs/method.md §2.3), so that Newton's system
   /// stays SPD when elements are compressed. linear: already PSD. stvk: the negative part of the
   /// 2nd Piola-Kirchhoff stress S is removed from the geometric stiffness V (B S B^T) (x) I (the
   /// material part is PSD): a 3x3 eigenproblem instead of a 12x12 one, and no change at all where

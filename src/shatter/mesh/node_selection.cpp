@@ -1,10 +1,16 @@
-// Node selection by ids, box, plane or named set (see node_selection.h).
-#include "shatter/scene/node_selection.h"
+// Node selection by ids, box, plane or named set; lumped boundary area; rigid-motion check
+// (see node_selection.h).
+#include "shatter/mesh/node_selection.h"
+
+#include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <unordered_map>
+
+#include "shatter/mesh/topology.h"
 
 namespace shatter {
 namespace {
@@ -101,6 +107,50 @@ std::string describe(const NodeSelector& s) {
     case NodeSelector::Kind::set: return "node set \"" + s.set + "\"";
   }
   return "?";
+}
+
+std::vector<double> lumped_boundary_area(const TetMesh& mesh, const std::vector<Index>& nodes) {
+  std::vector<char> selected(static_cast<std::size_t>(mesh.num_nodes()), 0);
+  for (Index i : nodes) selected[static_cast<std::size_t>(i)] = 1;
+  const TetFaces faces = compute_faces(mesh);
+  std::vector<double> area_of_node(static_cast<std::size_t>(mesh.num_nodes()), 0.0);
+  for (Index f = 0; f < faces.num_faces(); ++f) {
+    if (!faces.is_boundary(f)) continue;
+    const TriIndices& t = faces.faces[f];
+    if (!selected[t[0]] || !selected[t[1]] || !selected[t[2]]) continue;
+    const Vec3& a = mesh.positions[t[0]];
+    const double area = 0.5 * (mesh.positions[t[1]] - a).cross(mesh.positions[t[2]] - a).norm();
+    for (Index v : t) area_of_node[static_cast<std::size_t>(v)] += area / 3.0;
+  }
+  std::vector<double> out;
+  out.reserve(nodes.size());
+  for (Index i : nodes) out.push_back(area_of_node[static_cast<std::size_t>(i)]);
+  return out;
+}
+
+bool holds_rigid_motion(const TetMesh& mesh, const std::vector<Index>& piece_nodes,
+                       const std::vector<std::uint8_t>& held) {
+  Aabb box;
+  for (Index i : piece_nodes) box.extend(mesh.positions[i]);
+  const Vec3 centre = 0.5 * (box.min + box.max);
+  const double scale = std::max(box.extent().norm(), std::numeric_limits<double>::min());
+  Eigen::Matrix<double, 6, 6> gram = Eigen::Matrix<double, 6, 6>::Zero();
+  for (Index i : piece_nodes) {
+    if (held[i] == 0) continue;
+    const Vec3 p = (mesh.positions[i] - centre) / scale;
+    // velocity of component c under motion (t, w): t_c + (w x p)_c
+    for (int c = 0; c < 3; ++c) {
+      if (!(held[i] & (1u << c))) continue;
+      Eigen::Matrix<double, 6, 1> row = Eigen::Matrix<double, 6, 1>::Zero();
+      row[c] = 1.0;
+      const Vec3 e = Vec3::Unit(c);
+      const Vec3 rot = p.cross(e);  // (w x p)_c = w . (p x e_c)
+      row.tail<3>() = rot;
+      gram += row * row.transpose();
+    }
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(gram, Eigen::EigenvaluesOnly);
+  return eig.eigenvalues()[0] > 1e-12 * std::max(1.0, eig.eigenvalues()[5]);
 }
 
 }  // namespace shatter

@@ -1,5 +1,5 @@
 // Block pattern construction, greedy tet colouring and the in-place refill of the stiffness.
-#include "shatter/solve/assembly.h"
+#include "shatter/fem/assembly.h"
 
 #include <algorithm>
 #include <atomic>

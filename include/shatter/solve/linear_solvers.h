@@ -1,4 +1,4 @@
-// Linear solvers for Newton's system K dx = r on a BlockSparseMatrix (method.md §2.3, the paper's
+// Linear solvers for Newton's system K dx = r on a BlockSparseMatrix (docs/method.md §2.3, the paper's
 // §3.3): preconditioned conjugate gradients (3x3-block Jacobi, or symmetric block Gauss-Seidel) and
 // a sparse LDL^T factorization whose symbolic analysis is reused while the pattern stays the same.
 #pragma once
@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "shatter/core/error.h"
-#include "shatter/solve/assembly.h"
+#include "shatter/fem/assembly.h"
 
 namespace shatter {
 

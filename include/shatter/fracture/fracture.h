@@ -1,12 +1,11 @@
-// Fracture and plasticity of a body from a static solution (method.md §2.4-2.5): stresses, plastic
+// Fracture and plasticity of a body from a static solution (docs/method.md §2.4-2.5): stresses, plastic
 // rest-shape update, crack planning, cutting and the resulting fragments, in one call.
 #pragma once
 
 #include <vector>
 
 #include "shatter/core/types.h"
-#include "shatter/fem/constitutive.h"
-#include "shatter/fem/material.h"
+#include "shatter/fem/fem_model.h"
 #include "shatter/fracture/crack.h"
 #include "shatter/fracture/cut.h"
 #include "shatter/fracture/fragments.h"
@@ -48,13 +47,15 @@ struct FractureResult {
   std::vector<Fragment> fragments;     ///< components of mesh (maps index into mesh); one if unbroken
 };
 
-/// Stresses of `deformed` (m, #nodes of rest), then plasticity, cracks and fragments.
-FractureResult fracture(const TetMesh& rest, const std::vector<Vec3>& deformed, const Material& material,
-                        ModelKind model, const FractureOptions& options = {});
+/// Fracture and plasticity of the body `model` (material, model kind, rest data) whose rest mesh is
+/// `rest` (the tets of `model`): stresses of `deformed` (m, #nodes of rest) by compute_stresses, then
+/// plasticity, cracks and fragments.
+FractureResult fracture(const TetMesh& rest, const FemModel& model, const std::vector<Vec3>& deformed,
+                        const FractureOptions& options = {});
 
-/// The same from given per-tet stresses (e.g. a time-averaged StressHistory).
-FractureResult fracture_with_stress(const TetMesh& rest, const std::vector<Vec3>& deformed,
-                                    std::vector<TetStress> stress, const Material& material,
-                                    const FractureOptions& options = {});
+/// The same from given per-tet stresses (#tets; e.g. already computed, or a time-averaged
+/// StressHistory).
+FractureResult fracture_with_stress(const TetMesh& rest, const FemModel& model, const std::vector<Vec3>& deformed,
+                                    std::vector<TetStress> stress, const FractureOptions& options = {});
 
 }  // namespace shatter

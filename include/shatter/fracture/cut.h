@@ -1,4 +1,4 @@
-// Cutting a tet mesh along a crack (method.md §2.5, Fig. 4): optional splitting of the tets a plane
+// Cutting a tet mesh along a crack (docs/method.md §2.5, Fig. 4): optional splitting of the tets a plane
 // crosses, then disconnection of the faces between tets on opposite sides by duplicating nodes.
 #pragma once
 
@@ -19,7 +19,7 @@ struct CutPlane {
 
 struct CutOptions {
   /// Split the crack's tets that the plane crosses along it, so the crack surface is flat
-  /// (method.md Fig. 4). Off: the crack follows the mesh's faces.
+  /// (docs/method.md Fig. 4). Off: the crack follows the mesh's faces.
   bool split_tets = true;
   /// A node closer to the plane than snap_fraction x (its shortest edge in the crack region)
   /// counts as lying on it: no edge point is made near it (no slivers). Nodes are never moved,

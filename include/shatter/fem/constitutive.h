@@ -10,7 +10,7 @@
 
 namespace shatter {
 
-/// stvk: St. Venant-Kirchhoff, Green strain E = (F^T F - I)/2 (method.md §2.1), rotation invariant.
+/// stvk: St. Venant-Kirchhoff, Green strain E = (F^T F - I)/2 (docs/method.md §2.1), rotation invariant.
 /// linear: small-strain Hooke, eps = (F + F^T)/2 - I; NOT rotation invariant: a rigid rotation gives
 ///         spurious stress (of order the rotation angle squared times E for small angles).
 /// corotated: linear elasticity in the rotated frame of the polar decomposition F = R S,

@@ -1,8 +1,6 @@
-// Fragments: the connected components of a cut mesh as separate meshes with exact rigid-body mass
-// properties (constant density), and maps back to the parent's nodes and tets.
+// Rigid-body mass properties of a tet mesh of constant density: volume, mass, centre of mass and
+// inertia tensor, exact for the union of the tets or lumped at the nodes as in the paper (eq. 21).
 #pragma once
-
-#include <vector>
 
 #include "shatter/core/types.h"
 #include "shatter/mesh/tet_mesh.h"
@@ -22,19 +20,8 @@ struct MassProperties {
 /// closed form), summed about a reference point, then I = tr(C) I3 - C about the centre of mass.
 MassProperties mass_properties(const TetMesh& mesh, double density);
 
-/// The same with lumped nodal masses (each tet gives rho V / 4 to each corner; method.md eq. 21):
+/// The same with lumped nodal masses (each tet gives rho V / 4 to each corner; docs/method.md eq. 21):
 /// I = sum m_i (r_i^T r_i I3 - r_i r_i^T). Approximate; for comparison with the paper.
 MassProperties lumped_mass_properties(const TetMesh& mesh, double density);
-
-struct Fragment {
-  TetMesh mesh;                 ///< the component's tets and nodes
-  std::vector<Index> node_map;  ///< node of the source mesh of each fragment node (#nodes)
-  std::vector<Index> tet_map;   ///< tet of the source mesh of each fragment tet (#tets)
-  MassProperties mass;          ///< exact, at the given density
-};
-
-/// One fragment per connected component (tets sharing a node), in order of each component's
-/// lowest tet; tets keep their relative order.
-std::vector<Fragment> extract_fragments(const TetMesh& mesh, double density);
 
 }  // namespace shatter

@@ -8,6 +8,7 @@
 #include "shatter/core/error.h"
 #include "shatter/core/types.h"
 #include "shatter/fem/fem_model.h"
+#include "shatter/fracture/stress.h"
 #include "shatter/mesh/tet_mesh.h"
 
 namespace shatter {
@@ -27,9 +28,13 @@ struct StaticResults {
   double max_von_mises = 0;           ///< Pa
 };
 
-/// Stresses from the model's constitutive law at the deformed positions x (m, #nodes).
+/// Displacements and stresses (by compute_stresses, fracture/stress.h) at the deformed positions x
+/// (m, #nodes).
 StaticResults compute_static_results(const FemModel& model, const TetMesh& rest_mesh,
                                      const std::vector<Vec3>& x);
+/// The same from the stresses compute_stresses(model, x) already gave (#tets).
+StaticResults compute_static_results(const FemModel& model, const TetMesh& rest_mesh,
+                                     const std::vector<Vec3>& x, const std::vector<TetStress>& stress);
 
 /// displacements.csv: "node_id,ux,uy,uz" then one row per node (file ids, %.17g).
 Result<void> write_displacements_csv(const std::string& path, const TetMesh& mesh, const StaticResults& r);
