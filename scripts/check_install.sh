@@ -4,12 +4,13 @@
 # checks that they are installed, self-contained, and enough to mesh, solve and crack a body.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+root=$PWD
 prefix=$(mktemp -d)
 build=$(mktemp -d)
 trap 'rm -rf "$prefix" "$build"' EXIT
 cmake --install build/release --prefix "$prefix" >/dev/null
 # Only public headers are installed.
-if [[ -n "$(cd "$prefix/include" && find shatter -name '*.h' | sort | comm -3 - <(cd include && find shatter -name '*.h' | sort))" ]]; then
+if [[ -n "$(cd "$prefix/include" && find shatter -name '*.h' | sort | comm -3 - <(cd "$root/include" && find shatter -name '*.h' | sort))" ]]; then
   echo "check_install: the installed headers differ from include/shatter/" >&2
   exit 1
 fi
