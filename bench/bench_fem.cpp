@@ -37,8 +37,8 @@ const Case& get_case(std::int64_t target_tets, ModelKind kind) {
 
 void set_per_tet(benchmark::State& state, std::int64_t n_tets) {
   state.counters["tets"] = static_cast<double>(n_tets);
-  state.counters["time_per_tet"] = benchmark::Counter(static_cast<double>(n_tets),
-      benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["time_per_tet"] = benchmark::Counter(
+      static_cast<double>(n_tets), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 
 void BM_ForcesReference(benchmark::State& state) {
@@ -96,20 +96,30 @@ constexpr int kCorotated = static_cast<int>(ModelKind::corotated);
 
 BENCHMARK(BM_ForcesReference)
     ->ArgNames({"tets", "model"})
-    ->Args({4000, kStvk})->Args({40000, kStvk})->Args({400000, kStvk})
-    ->Args({40000, kLinear})->Args({40000, kCorotated})
+    ->Args({4000, kStvk})
+    ->Args({40000, kStvk})
+    ->Args({400000, kStvk})
+    ->Args({40000, kLinear})
+    ->Args({40000, kCorotated})
     ->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ForcesAccelerated)
     ->ArgNames({"tets", "model", "threads"})
-    ->Args({4000, kStvk, 1})->Args({4000, kStvk, 2})
-    ->Args({40000, kStvk, 1})->Args({40000, kStvk, 2})
-    ->Args({400000, kStvk, 1})->Args({400000, kStvk, 2})
-    ->Args({40000, kLinear, 2})->Args({40000, kCorotated, 2})
-    ->Unit(benchmark::kMicrosecond)->UseRealTime();
+    ->Args({4000, kStvk, 1})
+    ->Args({4000, kStvk, 2})
+    ->Args({40000, kStvk, 1})
+    ->Args({40000, kStvk, 2})
+    ->Args({400000, kStvk, 1})
+    ->Args({400000, kStvk, 2})
+    ->Args({40000, kLinear, 2})
+    ->Args({40000, kCorotated, 2})
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
 BENCHMARK(BM_TotalEnergy)
     ->ArgNames({"tets", "model", "threads"})
-    ->Args({40000, kStvk, 1})->Args({40000, kStvk, 2})
-    ->Unit(benchmark::kMicrosecond)->UseRealTime();
+    ->Args({40000, kStvk, 1})
+    ->Args({40000, kStvk, 2})
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
 BENCHMARK(BM_TetStiffness)->ArgNames({"model"})->Arg(kStvk)->Arg(kLinear)->Arg(kCorotated);
 
 }  // namespace

@@ -60,7 +60,9 @@ BENCHMARK(BM_FractureGivenStress)->Args({4000, 1})->Args({40000, 1})->Args({4000
 
 void BM_PlanCracks(benchmark::State& state) {
   const Setup& s = setup(state.range(0));
-  for (auto _ : state) benchmark::DoNotOptimize(plan_cracks(s.mesh, s.stress, s.material, {.radius_fraction = 0.2, .max_cracks = 1}).size());
+  for (auto _ : state)
+    benchmark::DoNotOptimize(
+        plan_cracks(s.mesh, s.stress, s.material, {.radius_fraction = 0.2, .max_cracks = 1}).size());
 }
 BENCHMARK(BM_PlanCracks)->Arg(4000)->Arg(40000)->Unit(benchmark::kMillisecond);
 

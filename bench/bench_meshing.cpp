@@ -37,11 +37,15 @@ void run(benchmark::State& state, const Sdf& sdf, double volume, double grading 
 }
 
 void BM_StuffSphere(benchmark::State& state) { run(state, Sdf::sphere(0.1), 4.0 / 3.0 * std::numbers::pi * 1e-3); }
-void BM_StuffCinderBlock(benchmark::State& state) { run(state, cinder_block(), 0.39 * 0.19 * 0.19 - 2 * 0.13 * 0.19 * 0.11); }
+void BM_StuffCinderBlock(benchmark::State& state) {
+  run(state, cinder_block(), 0.39 * 0.19 * 0.19 - 2 * 0.13 * 0.19 * 0.11);
+}
 
 // Grading 1 on the sphere: the lattice is sized for the uniform count (range), the output is
 // the coarsened mesh; tets_per_s counts output tets.
-void BM_StuffSphereGraded(benchmark::State& state) { run(state, Sdf::sphere(0.1), 4.0 / 3.0 * std::numbers::pi * 1e-3, 1.0); }
+void BM_StuffSphereGraded(benchmark::State& state) {
+  run(state, Sdf::sphere(0.1), 4.0 / 3.0 * std::numbers::pi * 1e-3, 1.0);
+}
 
 BENCHMARK(BM_StuffSphereGraded)->Arg(100'000)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_StuffSphereGraded)->Arg(1'000'000)->Iterations(1)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -14,8 +14,12 @@ namespace {
 
 Material glass() {
   // Soda-lime glass: E 70 GPa, nu 0.22, 2500 kg/m^3.
-  return Material{.name = "glass", .youngs_modulus = 70e9, .poisson_ratio = 0.22, .density = 2500,
-                  .tensile_strength = 50e6, .yield_stress = kInfinity};
+  return Material{.name = "glass",
+                  .youngs_modulus = 70e9,
+                  .poisson_ratio = 0.22,
+                  .density = 2500,
+                  .tensile_strength = 50e6,
+                  .yield_stress = kInfinity};
 }
 
 // Slab 0.5 x 0.1 x 0.5 m of about `tets` tets.

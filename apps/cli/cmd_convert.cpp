@@ -19,12 +19,14 @@ struct ConvertArgs {
 int run_convert(const ConvertArgs& args) {
   const bool to_surface = surface_format_from_path(args.output) != SurfaceFormat::unknown;
   if (!to_surface && mesh_format_from_path(args.output) == MeshFormat::unknown)
-    return report_error(args.output + ": unknown output extension; expected .msh .vtk .vtu .mesh .inp .node .ele "
-                                      "(volume) or .obj .ply .stl (boundary surface)",
+    return report_error(args.output +
+                            ": unknown output extension; expected .msh .vtk .vtu .mesh .inp .node .ele "
+                            "(volume) or .obj .ply .stl (boundary surface)",
                         kExitUsage);
   auto read = read_mesh(args.input);
   if (!read) return report_error(read.error().to_string(), kExitBadInput);
-  for (const std::string& s : read->skipped) std::fprintf(stderr, "shatter: note: %s: skipped %s\n", args.input.c_str(), s.c_str());
+  for (const std::string& s : read->skipped)
+    std::fprintf(stderr, "shatter: note: %s: skipped %s\n", args.input.c_str(), s.c_str());
   Result<void> written;
   if (to_surface) {
     const TriSurface surface = boundary_surface(read->mesh);

@@ -25,8 +25,8 @@ int run_inspect(const InspectArgs& args) {
   if (!read) return report_error(read.error().to_string(), kExitBadInput);
   const TetMesh& mesh = read->mesh;
   const ValidationReport report = validate_mesh(mesh);
-  const bool indices_ok = report.count(MeshProblemKind::index_out_of_range) == 0 &&
-                          report.count(MeshProblemKind::attribute_size) == 0;
+  const bool indices_ok =
+      report.count(MeshProblemKind::index_out_of_range) == 0 && report.count(MeshProblemKind::attribute_size) == 0;
   const Aabb box = mesh.bounds();
   QualitySummary q;
   Index components = 0, boundary_triangles = 0;
@@ -50,13 +50,16 @@ int run_inspect(const InspectArgs& args) {
     j["tets"] = mesh.num_tets();
     j["skipped"] = read->skipped;
     if (!box.empty()) {
-      j["bounds"] = {{"min", {box.min.x(), box.min.y(), box.min.z()}}, {"max", {box.max.x(), box.max.y(), box.max.z()}}};
+      j["bounds"] = {{"min", {box.min.x(), box.min.y(), box.min.z()}},
+                     {"max", {box.max.x(), box.max.y(), box.max.z()}}};
     }
     if (indices_ok && mesh.num_tets() > 0) {
       j["volume"] = q.volume;
       j["tet_volume"] = {{"min", q.min_tet_volume}, {"max", q.max_tet_volume}};
       j["dihedral_deg"] = {{"min", q.min_dihedral_deg}, {"max", q.max_dihedral_deg}};
-      j["aspect_ratio"] = {{"min", q.min_aspect}, {"max", q.max_aspect}, {"mean", q.mean_aspect},
+      j["aspect_ratio"] = {{"min", q.min_aspect},
+                           {"max", q.max_aspect},
+                           {"mean", q.mean_aspect},
                            {"worst_tet", mesh.tet_id(q.worst_aspect_tet)}};
       j["components"] = components;
       j["boundary_triangles"] = boundary_triangles;
@@ -103,7 +106,8 @@ int run_inspect(const InspectArgs& args) {
       std::size_t shown = 0;
       for (const MeshProblem& p : report.problems) shown += static_cast<std::size_t>(p.kind) == k;
       if (report.counts[k] > shown)
-        out += fmt::format("  ... and {} more {}\n", report.counts[k] - shown, to_string(static_cast<MeshProblemKind>(k)));
+        out +=
+            fmt::format("  ... and {} more {}\n", report.counts[k] - shown, to_string(static_cast<MeshProblemKind>(k)));
     }
     std::fputs(out.c_str(), stdout);
   }

@@ -51,8 +51,7 @@ Result<Sdf> primitive(const MeshArgs& a) {
     return {};
   };
   auto vec = [](const std::vector<double>& v, const char* name) -> Result<Vec3> {
-    if (v.size() != 3 || !(v[0] > 0 && v[1] > 0 && v[2] > 0))
-      return field_error(name, "expected 3 lengths > 0 m");
+    if (v.size() != 3 || !(v[0] > 0 && v[1] > 0 && v[2] > 0)) return field_error(name, "expected 3 lengths > 0 m");
     return Vec3(v[0], v[1], v[2]);
   };
   const std::string& p = a.primitive;
@@ -124,12 +123,12 @@ int run_mesh(const MeshArgs& a) {
   if (!(def.edge_length > 0) && def.target_tets <= 0)
     return report_error("give --edge-length H (m) or --tets N", kExitUsage);
   if (a.grading) {
-    if (!(*a.grading >= 0) || !std::isfinite(*a.grading)) return report_error("--grading: expected a number >= 0", kExitUsage);
+    if (!(*a.grading >= 0) || !std::isfinite(*a.grading))
+      return report_error("--grading: expected a number >= 0", kExitUsage);
     def.grading = *a.grading;
   }
   if (a.no_sharpen) def.sharpen = false;
-  if (!(a.refine > 0) || !std::isfinite(a.refine))
-    return report_error("--refine: expected a factor > 0", kExitUsage);
+  if (!(a.refine > 0) || !std::isfinite(a.refine)) return report_error("--refine: expected a factor > 0", kExitUsage);
   // About `refine` times as many tets: h / cbrt(refine), or the target count times refine.
   def.edge_length /= std::cbrt(a.refine);
   def.target_tets = static_cast<std::int64_t>(std::llround(static_cast<double>(def.target_tets) * a.refine));
@@ -248,8 +247,7 @@ RunFn setup_mesh(CLI::App& sub) {
   return [a] { return run_mesh(*a); };
 }
 
-const Registration reg{"mesh", "Tetrahedral mesh of a primitive, JSON shape or closed surface",
-                       &setup_mesh};
+const Registration reg{"mesh", "Tetrahedral mesh of a primitive, JSON shape or closed surface", &setup_mesh};
 
 }  // namespace
 }  // namespace shatter::cli

@@ -31,9 +31,7 @@ struct StaticArgs {
 };
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 std::string vec_text(const Vec3& v) { return fmt::format("[{:.6g}, {:.6g}, {:.6g}]", v.x(), v.y(), v.z()); }
 
@@ -53,11 +51,11 @@ int run_static(const StaticArgs& args) {
   if (!analysis) return report_error(analysis.error().to_string(), kExitBadInput);
   const StaticReport* report = &analysis->report;
   if (!report->converged)
-    return report_error(fmt::format("the static solver did not converge: {} (Newton iterations {}, relative "
-                                    "residual {:.3g}, load fraction {:.3g}); no output written",
-                                    report->message, report->newton_iterations, report->relative_residual,
-                                    report->load_fraction),
-                        kExitFailure);
+    return report_error(
+        fmt::format("the static solver did not converge: {} (Newton iterations {}, relative "
+                    "residual {:.3g}, load fraction {:.3g}); no output written",
+                    report->message, report->newton_iterations, report->relative_residual, report->load_fraction),
+        kExitFailure);
 
   // Files.
   const auto t_write = Clock::now();
@@ -89,14 +87,15 @@ int run_static(const StaticArgs& args) {
     nlohmann::ordered_json j;
     j["case"] = args.case_path;
     j["name"] = scase->name;
-    j["mesh"] = {{"file", args.mesh_path}, {"format", read->format}, {"nodes", mesh.num_nodes()},
-                 {"tets", mesh.num_tets()}};
-    j["material"] = {{"name", mat.name},
-                     {"youngs_modulus", mat.youngs_modulus},
-                     {"poisson_ratio", mat.poisson_ratio},
-                     {"density", mat.density},
-                     {"tensile_strength", std::isfinite(mat.tensile_strength) ? nlohmann::ordered_json(mat.tensile_strength)
-                                                                              : nlohmann::ordered_json(nullptr)}};
+    j["mesh"] = {
+        {"file", args.mesh_path}, {"format", read->format}, {"nodes", mesh.num_nodes()}, {"tets", mesh.num_tets()}};
+    j["material"] = {
+        {"name", mat.name},
+        {"youngs_modulus", mat.youngs_modulus},
+        {"poisson_ratio", mat.poisson_ratio},
+        {"density", mat.density},
+        {"tensile_strength", std::isfinite(mat.tensile_strength) ? nlohmann::ordered_json(mat.tensile_strength)
+                                                                 : nlohmann::ordered_json(nullptr)}};
     j["model"] = to_string(scase->model);
     j["held_nodes"] = resolved->num_held_nodes;
     j["total_load"] = {resolved->total_load.x(), resolved->total_load.y(), resolved->total_load.z()};
@@ -108,17 +107,22 @@ int run_static(const StaticArgs& args) {
                    {"linear_solver", to_string(options.linear.kind)},
                    {"linear_iterations", report->linear_iterations_total}};
     const Vec3& u = results.displacement[maxu];
-    j["max_displacement"] = {{"value", results.max_displacement}, {"node_id", mesh.node_id(maxu)},
-                             {"vector", {u.x(), u.y(), u.z()}}};
+    j["max_displacement"] = {
+        {"value", results.max_displacement}, {"node_id", mesh.node_id(maxu)}, {"vector", {u.x(), u.y(), u.z()}}};
     const Vec3& d = results.max_direction[maxs];
-    j["max_principal_stress"] = {{"value", results.max_principal_stress}, {"element_id", mesh.tet_id(maxs)},
+    j["max_principal_stress"] = {{"value", results.max_principal_stress},
+                                 {"element_id", mesh.tet_id(maxs)},
                                  {"direction", {d.x(), d.y(), d.z()}}};
     j["max_von_mises"] = {{"value", results.max_von_mises}, {"element_id", mesh.tet_id(maxvm)}};
     j["would_crack"] = results.max_principal_stress > mat.tensile_strength;
-    j["time_ms"] = {{"read", read_ms},          {"setup", setup_ms},
-                    {"solve", report->total_ms}, {"assembly", report->assembly_ms},
-                    {"linear_solve", report->linear_solve_ms}, {"forces", report->force_ms},
-                    {"fracture", fracture_ms}, {"write", write_ms}};
+    j["time_ms"] = {{"read", read_ms},
+                    {"setup", setup_ms},
+                    {"solve", report->total_ms},
+                    {"assembly", report->assembly_ms},
+                    {"linear_solve", report->linear_solve_ms},
+                    {"forces", report->force_ms},
+                    {"fracture", fracture_ms},
+                    {"write", write_ms}};
     if (args.fracture) {
       nlohmann::ordered_json jf;
       jf["broken"] = frac.fragments.size() > 1;
@@ -165,8 +169,9 @@ int run_static(const StaticArgs& args) {
   s += fmt::format("case        {} ({})\n", scase->name, args.case_path);
   s += fmt::format("mesh        {} ({}): {} nodes, {} tets\n", args.mesh_path, read->format, mesh.num_nodes(),
                    mesh.num_tets());
-  s += fmt::format("material    {}: E = {:.4g} Pa, nu = {:.4g}, density = {:.4g} kg/m^3, tensile strength = {:.4g} Pa\n",
-                   mat.name, mat.youngs_modulus, mat.poisson_ratio, mat.density, mat.tensile_strength);
+  s +=
+      fmt::format("material    {}: E = {:.4g} Pa, nu = {:.4g}, density = {:.4g} kg/m^3, tensile strength = {:.4g} Pa\n",
+                  mat.name, mat.youngs_modulus, mat.poisson_ratio, mat.density, mat.tensile_strength);
   s += fmt::format("model       {}\n", to_string(scase->model));
   s += fmt::format("anchors     {} nodes held\n", resolved->num_held_nodes);
   s += fmt::format("loads       {} N nodal", vec_text(resolved->total_load));
@@ -191,10 +196,11 @@ int run_static(const StaticArgs& args) {
     for (std::size_t k = 0; k < frac.events.size(); ++k) {
       const CrackEvent& ev = frac.events[k];
       const CrackPlan& p = ev.plan;
-      s += fmt::format("  crack {}   {}from element {} at {} m, normal {}, radius {:.4g} m, sigma1 {:.4g} Pa: "
-                       "{} tets marked, {} split, {} nodes duplicated\n",
-                       k, p.ductile ? "(ductile) " : "", mesh.tet_id(p.origin_tet), vec_text(p.origin),
-                       vec_text(p.normal), p.radius, p.stress, ev.tets_marked, ev.tets_split, ev.nodes_duplicated);
+      s += fmt::format(
+          "  crack {}   {}from element {} at {} m, normal {}, radius {:.4g} m, sigma1 {:.4g} Pa: "
+          "{} tets marked, {} split, {} nodes duplicated\n",
+          k, p.ductile ? "(ductile) " : "", mesh.tet_id(p.origin_tet), vec_text(p.origin), vec_text(p.normal), p.radius,
+          p.stress, ev.tets_marked, ev.tets_split, ev.nodes_duplicated);
     }
     for (std::size_t k = 0; k < frac.fragments.size(); ++k) {
       const Fragment& f = frac.fragments[k];
@@ -206,17 +212,19 @@ int run_static(const StaticArgs& args) {
         s += fmt::format("plasticity  no tet over the yield stress ({:.4g} Pa): the rest shape is unchanged\n",
                          mat.yield_stress);
       else
-        s += fmt::format("plasticity  {} tet(s) yielded (von Mises over {:.4g} Pa), max plastic strain {:.4g}; "
-                         "new rest shape in {}\n",
-                         frac.plastic.yielded.size(), mat.yield_stress, max_plastic_strain(frac), rest_path);
+        s += fmt::format(
+            "plasticity  {} tet(s) yielded (von Mises over {:.4g} Pa), max plastic strain {:.4g}; "
+            "new rest shape in {}\n",
+            frac.plastic.yielded.size(), mat.yield_stress, max_plastic_strain(frac), rest_path);
     }
   } else if (scase->fracture_given) {
     s += "fracture    the case's \"fracture\" section is used with --fracture\n";
   }
-  s += fmt::format("time        read {:.1f} ms, setup {:.1f} ms, solve {:.1f} ms (assembly {:.1f}, linear {:.1f}, "
-                   "forces {:.1f}), {}write {:.1f} ms\n",
-                   read_ms, setup_ms, report->total_ms, report->assembly_ms, report->linear_solve_ms,
-                   report->force_ms, args.fracture ? fmt::format("fracture {:.1f} ms, ", fracture_ms) : "", write_ms);
+  s += fmt::format(
+      "time        read {:.1f} ms, setup {:.1f} ms, solve {:.1f} ms (assembly {:.1f}, linear {:.1f}, "
+      "forces {:.1f}), {}write {:.1f} ms\n",
+      read_ms, setup_ms, report->total_ms, report->assembly_ms, report->linear_solve_ms, report->force_ms,
+      args.fracture ? fmt::format("fracture {:.1f} ms, ", fracture_ms) : "", write_ms);
   s += "output      ";
   for (std::size_t k = 0; k < outputs.size(); ++k) s += (k ? ", " : "") + outputs[k];
   s += "\n";

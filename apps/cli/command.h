@@ -13,10 +13,10 @@ namespace shatter::cli {
 /// Exit codes (docs/cli.md).
 enum ExitCode : int {
   kExitOk = 0,
-  kExitFailure = 1,     ///< the command ran but its outcome is a failure (e.g. solver did not converge)
-  kExitUsage = 2,       ///< bad command line
-  kExitBadInput = 3,    ///< an input file or parameter is invalid
-  kExitOutput = 4,      ///< an output could not be written
+  kExitFailure = 1,   ///< the command ran but its outcome is a failure (e.g. solver did not converge)
+  kExitUsage = 2,     ///< bad command line
+  kExitBadInput = 3,  ///< an input file or parameter is invalid
+  kExitOutput = 4,    ///< an output could not be written
 };
 
 using RunFn = std::function<int()>;

@@ -24,16 +24,16 @@ int main(int argc, char** argv) {
   StaticCase load;
   load.name = "pulled_bar";
   load.material = material_preset("glass").value();
-  load.anchors.push_back(AnchorSpec{
-      .where = {.kind = NodeSelector::Kind::plane, .point = Vec3(-half.x(), 0, 0), .normal = Vec3::UnitX()},
-      .field = "anchors[0]"});
+  load.anchors.push_back(
+      AnchorSpec{.where = {.kind = NodeSelector::Kind::plane, .point = Vec3(-half.x(), 0, 0), .normal = Vec3::UnitX()},
+                 .field = "anchors[0]"});
   const double area = 4 * half.y() * half.z();
-  load.loads.push_back(LoadSpec{
-      .where = {.kind = NodeSelector::Kind::plane, .point = Vec3(half.x(), 0, 0), .normal = Vec3::UnitX()},
-      .force = Vec3(60e6 * area, 0, 0),
-      .per_node = false,
-      .distribution = LoadSpec::Distribution::area,
-      .field = "loads[0]"});
+  load.loads.push_back(
+      LoadSpec{.where = {.kind = NodeSelector::Kind::plane, .point = Vec3(half.x(), 0, 0), .normal = Vec3::UnitX()},
+               .force = Vec3(60e6 * area, 0, 0),
+               .per_node = false,
+               .distribution = LoadSpec::Distribution::area,
+               .field = "loads[0]"});
 
   // Solve, crack, write.
   auto analysis = run_static_analysis(load, mesh, {.fracture = true});
@@ -52,8 +52,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   const FractureResult& broken = *analysis->fracture;
-  std::printf("embed: %d tets, max principal stress %.3g Pa, %zu crack(s), %zu fragment(s) in %s\n",
-              mesh.num_tets(), analysis->results.max_principal_stress, broken.events.size(),
-              broken.fragments.size(), out_dir.c_str());
+  std::printf("embed: %d tets, max principal stress %.3g Pa, %zu crack(s), %zu fragment(s) in %s\n", mesh.num_tets(),
+              analysis->results.max_principal_stress, broken.events.size(), broken.fragments.size(), out_dir.c_str());
   return broken.fragments.size() >= 2 ? 0 : 1;
 }

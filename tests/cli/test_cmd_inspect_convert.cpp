@@ -72,8 +72,8 @@ TEST(CmdConvert, EveryFormatKeepsTheMeshAndIds) {
   for (const char* ext : {".vtu", ".vtk", ".mesh", ".inp", ".node", ".msh"}) {
     const std::string out = dir.file(std::string("out") + ext);
     for (const char* binary : {"", " --binary"}) {
-      const auto r = test::run_command(test::cli_path() + " convert -q" + binary + " " + quoted(dir.file("in.msh")) +
-                                       " " + quoted(out), true);
+      const auto r = test::run_command(
+          test::cli_path() + " convert -q" + binary + " " + quoted(dir.file("in.msh")) + " " + quoted(out), true);
       ASSERT_EQ(r.status, 0) << ext << ": " << r.output;
       auto back = read_mesh(out);
       ASSERT_OK(back);
@@ -91,8 +91,9 @@ TEST(CmdConvert, SurfaceOutputCarriesNodeIds) {
   TetMesh m = make_box_mesh({.cells = {2, 2, 2}});
   for (Index i = 0; i < m.num_nodes(); ++i) m.node_ids.push_back(7 + i);
   ASSERT_OK(write_mesh(dir.file("in.msh"), m));
-  const auto r = test::run_command(test::cli_path() + " convert -q --binary " + quoted(dir.file("in.msh")) + " " +
-                                   quoted(dir.file("skin.ply")), true);
+  const auto r = test::run_command(
+      test::cli_path() + " convert -q --binary " + quoted(dir.file("in.msh")) + " " + quoted(dir.file("skin.ply")),
+      true);
   ASSERT_EQ(r.status, 0) << r.output;
   auto s = read_surface(dir.file("skin.ply"));
   ASSERT_OK(s);
@@ -109,20 +110,24 @@ TEST(CmdConvert, BadInputsAndOutputs) {
   test::TempDir dir;
   ASSERT_OK(write_mesh(dir.file("in.vtu"), make_box_mesh({})));
   // Unknown extension: usage error, nothing written.
-  auto r = test::run_command(test::cli_path() + " convert " + quoted(dir.file("in.vtu")) + " " + quoted(dir.file("x.xyz")), true);
+  auto r = test::run_command(
+      test::cli_path() + " convert " + quoted(dir.file("in.vtu")) + " " + quoted(dir.file("x.xyz")), true);
   EXPECT_EQ(r.status, 2);
   EXPECT_FALSE(std::filesystem::exists(dir.file("x.xyz")));
   // Missing input: bad input.
-  r = test::run_command(test::cli_path() + " convert " + quoted(dir.file("none.msh")) + " " + quoted(dir.file("y.vtu")), true);
+  r = test::run_command(test::cli_path() + " convert " + quoted(dir.file("none.msh")) + " " + quoted(dir.file("y.vtu")),
+                        true);
   EXPECT_EQ(r.status, 3);
   EXPECT_NE(r.output.find("none.msh"), std::string::npos);
   // Unwritable output folder: output error, and an existing file stays as it was.
-  r = test::run_command(test::cli_path() + " convert " + quoted(dir.file("in.vtu")) + " " +
-                            quoted(dir.file("no/such/dir/out.msh")), true);
+  r = test::run_command(
+      test::cli_path() + " convert " + quoted(dir.file("in.vtu")) + " " + quoted(dir.file("no/such/dir/out.msh")),
+      true);
   EXPECT_EQ(r.status, 4) << r.output;
   std::ofstream(dir.file("keep.msh")) << "old";
   std::ofstream(dir.file("bad.vtu")) << "<VTKFile";
-  r = test::run_command(test::cli_path() + " convert " + quoted(dir.file("bad.vtu")) + " " + quoted(dir.file("keep.msh")), true);
+  r = test::run_command(
+      test::cli_path() + " convert " + quoted(dir.file("bad.vtu")) + " " + quoted(dir.file("keep.msh")), true);
   EXPECT_EQ(r.status, 3);
   std::ifstream in(dir.file("keep.msh"));
   std::string content((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -70,8 +70,7 @@ TEST(Constitutive, RotationInvariance) {
       const double psi = energy_density(kind, lame, F);
       EXPECT_NEAR(energy_density(kind, lame, R * F), psi, 1e-13 * (1 + psi)) << to_string(kind);
       // P(R F) = R P(F).
-      EXPECT_LT((first_piola(kind, lame, R * F) - R * first_piola(kind, lame, F)).norm(), 1e-13)
-          << to_string(kind);
+      EXPECT_LT((first_piola(kind, lame, R * F) - R * first_piola(kind, lame, F)).norm(), 1e-13) << to_string(kind);
     }
   }
 }
@@ -111,8 +110,9 @@ TEST(Constitutive, CorotatedSmoothNearRotation) {
       for (int j = 0; j < 3; ++j) dF(i, j) = rng.uniform(-1, 1);
     const double h = 1e-6;
     const Mat3 dP = first_piola_differential(ModelKind::corotated, lame, F, dF);
-    const Mat3 dP_fd = (first_piola(ModelKind::corotated, lame, F + h * dF) -
-                        first_piola(ModelKind::corotated, lame, F - h * dF)) / (2 * h);
+    const Mat3 dP_fd =
+        (first_piola(ModelKind::corotated, lame, F + h * dF) - first_piola(ModelKind::corotated, lame, F - h * dF)) /
+        (2 * h);
     EXPECT_LT((dP - dP_fd).norm(), 1e-6 * dP.norm()) << trial;
   }
 }

@@ -85,8 +85,8 @@ TEST(FemModel, AcceleratedMatchesReferenceOnAnyThreadCount) {
   Random rng(22);
   for (auto pattern : {BoxMeshDef::Pattern::six, BoxMeshDef::Pattern::five}) {
     // Large enough for several blocks and a parallel gather.
-    const TetMesh mesh = make_box_mesh({.max = Vec3(1, 0.6, 0.4), .cells = {16, 10, 7},
-                                        .pattern = pattern, .jitter = 0.2, .seed = 9});
+    const TetMesh mesh =
+        make_box_mesh({.max = Vec3(1, 0.6, 0.4), .cells = {16, 10, 7}, .pattern = pattern, .jitter = 0.2, .seed = 9});
     for (ModelKind kind : kAllModels) {
       const FemModel model = make_fem_model(mesh, test_material(), kind);
       std::vector<Vec3> x = affine(mesh.positions, test::random_deformation(rng, 0.01), Vec3(1, 2, 3));

@@ -63,7 +63,8 @@ TEST(TetKernels, ForcesAndStiffnessMatchFiniteDifferences) {
         xp(c % 3, c / 3) += h;
         xm(c % 3, c / 3) -= h;
         f_fd[c] = (tet_energy(kind, lame, r, xp) - tet_energy(kind, lame, r, xm)) / (2 * h);
-        K_fd.col(c) = (flat(tet_internal_forces(kind, lame, r, xp)) - flat(tet_internal_forces(kind, lame, r, xm))) / (2 * h);
+        K_fd.col(c) =
+            (flat(tet_internal_forces(kind, lame, r, xp)) - flat(tet_internal_forces(kind, lame, r, xm))) / (2 * h);
       }
       EXPECT_LT((f - f_fd).norm(), 1e-6 * f.norm()) << to_string(kind) << " trial " << trial;
       EXPECT_LT((K - K_fd).norm(), 1e-6 * K.norm()) << to_string(kind) << " trial " << trial;
@@ -141,8 +142,8 @@ TEST(TetKernels, SingleTetStVKUniaxialStretch) {
     const Mat3 sigma = cauchy_stress(ModelKind::stvk, lame, deformation_gradient(r, x));
     const Mat3 sigma_expected = Vec3(s * S11, S22 / s, S22 / s).asDiagonal();
     EXPECT_LT((sigma - sigma_expected).norm(), 1e-14 * sigma_expected.norm()) << s;
-    EXPECT_NEAR(tet_energy(ModelKind::stvk, lame, r, x),
-                (lame.mu * e * e + 0.5 * lame.lambda * e * e) / 6, 1e-14 * S11 * e);
+    EXPECT_NEAR(tet_energy(ModelKind::stvk, lame, r, x), (lame.mu * e * e + 0.5 * lame.lambda * e * e) / 6,
+                1e-14 * S11 * e);
   }
 }
 
@@ -225,11 +226,11 @@ TEST(TetKernels, PrincipalStressesRandomAndDeterministic) {
 
 TEST(TetKernels, VonMises) {
   const double s = 2.5e8;
-  EXPECT_DOUBLE_EQ(von_mises(Vec3(s, 0, 0).asDiagonal()), s);           // uniaxial
-  EXPECT_DOUBLE_EQ(von_mises(Mat3(s * Mat3::Identity())), 0.0);          // hydrostatic
+  EXPECT_DOUBLE_EQ(von_mises(Vec3(s, 0, 0).asDiagonal()), s);    // uniaxial
+  EXPECT_DOUBLE_EQ(von_mises(Mat3(s * Mat3::Identity())), 0.0);  // hydrostatic
   Mat3 shear = Mat3::Zero();
   shear(0, 1) = shear(1, 0) = s;
-  EXPECT_NEAR(von_mises(shear), std::sqrt(3.0) * s, 1e-15 * s);          // pure shear
+  EXPECT_NEAR(von_mises(shear), std::sqrt(3.0) * s, 1e-15 * s);  // pure shear
   Random rng(7);
   const Mat3 Q = test::random_rotation(rng);
   EXPECT_NEAR(von_mises(Q * Vec3(s, 0, 0).asDiagonal() * Q.transpose()), s, 1e-14 * s);

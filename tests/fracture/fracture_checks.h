@@ -24,8 +24,7 @@ inline ::testing::AssertionResult mesh_is_valid(const TetMesh& m, double min_vol
       return ::testing::AssertionFailure() << "tet " << e << " volume " << v << " (min " << min_volume << ")";
   }
   const ValidationReport report = validate_mesh(m);
-  for (const MeshProblem& p : report.problems)
-    return ::testing::AssertionFailure() << "validate_mesh: " << p.message;
+  for (const MeshProblem& p : report.problems) return ::testing::AssertionFailure() << "validate_mesh: " << p.message;
   const TetFaces faces = compute_faces(m);
   if (!faces.overshared.empty()) return ::testing::AssertionFailure() << "overshared face";
   const TriSurface s = boundary_surface(m, faces);

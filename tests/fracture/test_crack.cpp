@@ -28,14 +28,15 @@ Material test_material(double strength) {
 template <class F>
 std::vector<TetStress> uniaxial(const TetMesh& m, const Vec3& axis, F&& s) {
   std::vector<Mat3> sigma;
-  for (Index e = 0; e < m.num_tets(); ++e) sigma.push_back(s(Vec3(m.corners(e).rowwise().mean())) * axis * axis.transpose());
+  for (Index e = 0; e < m.num_tets(); ++e)
+    sigma.push_back(s(Vec3(m.corners(e).rowwise().mean())) * axis * axis.transpose());
   return analyze_stresses(sigma);
 }
 
 TEST(CrackRadius, RuleAndMaterials) {
-  EXPECT_EQ(crack_radius(1.0, 1.0, 4, 2.0, 0.1), 0.1);     // at strength: minimum
+  EXPECT_EQ(crack_radius(1.0, 1.0, 4, 2.0, 0.1), 0.1);  // at strength: minimum
   EXPECT_NEAR(crack_radius(1.1, 1.0, 4, 2.0, 0.1), 0.8, 1e-14);
-  EXPECT_EQ(crack_radius(2.0, 1.0, 4, 2.0, 0.1), 2.0);     // clamped to r_0
+  EXPECT_EQ(crack_radius(2.0, 1.0, 4, 2.0, 0.1), 2.0);  // clamped to r_0
   EXPECT_LT(crack_radius(1.1, 1.0, 1, 2.0, 0.1), crack_radius(1.1, 1.0, 4, 2.0, 0.1));
   const double glass = material_brittleness(material_preset("glass").value(), 0.3);
   const double steel = material_brittleness(material_preset("steel").value(), 0.3);

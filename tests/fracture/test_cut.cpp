@@ -82,7 +82,8 @@ TEST(SplitTet, SnapsNearlyOnPlaneNodes) {
 
 TEST(Cut, BarCutThroughGivesTwoExactHalves) {
   for (auto pattern : {BoxMeshDef::Pattern::six, BoxMeshDef::Pattern::five}) {
-    const TetMesh m = make_box_mesh({.min = Vec3(0, 0, 0), .max = Vec3(4, 1, 1), .cells = {8, 2, 2}, .pattern = pattern});
+    const TetMesh m =
+        make_box_mesh({.min = Vec3(0, 0, 0), .max = Vec3(4, 1, 1), .cells = {8, 2, 2}, .pattern = pattern});
     const double x0 = 1.37;
     const CutResult r = cut_mesh(m, {.point = Vec3(x0, 0.5, 0.5), .normal = Vec3(1, 0, 0)}, all_tets(m));
     EXPECT_TRUE(test::mesh_is_valid(r.mesh));
@@ -98,8 +99,8 @@ TEST(Cut, BarCutThroughGivesTwoExactHalves) {
     for (const Vec3& p : left.mesh.positions) EXPECT_LE(p.x(), x0 + 1e-12);
     for (const Vec3& p : right.mesh.positions) EXPECT_GE(p.x(), x0 - 1e-12);
     // Without splitting, the crack follows faces: still two pieces, same total.
-    const CutResult faces_only = cut_mesh(m, {.point = Vec3(x0, 0.5, 0.5), .normal = Vec3(1, 0, 0)}, all_tets(m),
-                                          {.split_tets = false});
+    const CutResult faces_only =
+        cut_mesh(m, {.point = Vec3(x0, 0.5, 0.5), .normal = Vec3(1, 0, 0)}, all_tets(m), {.split_tets = false});
     EXPECT_EQ(faces_only.tets_split, 0);
     EXPECT_TRUE(test::mesh_is_valid(faces_only.mesh));
     EXPECT_EQ(connected_components(faces_only.mesh).count, 2);
@@ -168,8 +169,12 @@ TEST(Cut, RandomisedSoak) {
     const auto pattern = mesh_index % 2 ? BoxMeshDef::Pattern::five : BoxMeshDef::Pattern::six;
     const double jitter = (mesh_index % 3) * 0.12;
     const Index n = 2 + mesh_index % 3;
-    TetMesh m = make_box_mesh({.min = Vec3(-1, -0.5, 0), .max = Vec3(1, 0.5, 0.7), .cells = {n + 1, n, n},
-                               .pattern = pattern, .jitter = jitter, .seed = std::uint64_t(mesh_index + 1)});
+    TetMesh m = make_box_mesh({.min = Vec3(-1, -0.5, 0),
+                               .max = Vec3(1, 0.5, 0.7),
+                               .cells = {n + 1, n, n},
+                               .pattern = pattern,
+                               .jitter = jitter,
+                               .seed = std::uint64_t(mesh_index + 1)});
     const double volume = total_volume(m);
     for (int step = 0; step < 40; ++step) {
       const Vec3 point = rng.uniform_vec3(-0.6, 0.6);
@@ -178,7 +183,8 @@ TEST(Cut, RandomisedSoak) {
       std::vector<Index> region;
       for (Index e = 0; e < m.num_tets(); ++e)
         if ((m.corners(e).rowwise().mean() - point).norm() < radius) region.push_back(e);
-      const CutOptions options{.split_tets = rng.uniform() < 0.8, .snap_fraction = rng.uniform(0.0, 0.2),
+      const CutOptions options{.split_tets = rng.uniform() < 0.8,
+                               .snap_fraction = rng.uniform(0.0, 0.2),
                                .min_volume_fraction = rng.uniform(1e-4, 1e-2)};
       const CutResult r = cut_mesh(m, {.point = point, .normal = normal}, region, options);
       ++cuts;

@@ -41,7 +41,8 @@ TEST(Fracture, SeveralCracksConserveAndMap) {
   // Volumes of the pieces of each input tet sum to its volume.
   std::vector<double> piece_volume(m.tets.size(), 0.0);
   for (Index e = 0; e < r.mesh.num_tets(); ++e) piece_volume[r.tet_parent[e]] += signed_volume(r.mesh, e);
-  for (Index e = 0; e < m.num_tets(); ++e) EXPECT_NEAR(piece_volume[e], signed_volume(m, e), 1e-12 * signed_volume(m, e));
+  for (Index e = 0; e < m.num_tets(); ++e)
+    EXPECT_NEAR(piece_volume[e], signed_volume(m, e), 1e-12 * signed_volume(m, e));
   // Kept nodes deform as their parents; deformed positions of new nodes lie near their parents'.
   for (Index i = 0; i < r.mesh.num_nodes(); ++i) {
     const Index p = r.node_parent[i];
@@ -69,7 +70,8 @@ TEST(Fracture, DuctileTearAfterPlasticStrain) {
   std::vector<Vec3> x = m.positions;
   // Uniaxial stress of twice the yield stress (and below the tensile strength).
   const double eps = 2 * lead.yield_stress / lead.youngs_modulus;
-  for (Vec3& p : x) p = Vec3(p.x() * (1 + eps), p.y() * (1 - lead.poisson_ratio * eps), p.z() * (1 - lead.poisson_ratio * eps));
+  for (Vec3& p : x)
+    p = Vec3(p.x() * (1 + eps), p.y() * (1 - lead.poisson_ratio * eps), p.z() * (1 - lead.poisson_ratio * eps));
   FractureOptions options;
   options.plasticity.max_plastic_strain = 0.1 * eps;
   options.crack.max_cracks = 1;
@@ -89,8 +91,10 @@ TEST(Fracture, TimeAveragedStressIgnoresASpike) {
   StressHistory spike(m.num_tets(), 0.01), sustained(m.num_tets(), 0.01);
   spike.update(load, 0.001);
   for (int i = 0; i < 30; ++i) sustained.update(load, 0.001);
-  const FractureResult a = fracture_with_stress(m, make_fem_model(m, glass, ModelKind::stvk), m.positions, analyze_stresses(spike.averaged()), options);
-  const FractureResult b = fracture_with_stress(m, make_fem_model(m, glass, ModelKind::stvk), m.positions, analyze_stresses(sustained.averaged()), options);
+  const FractureResult a = fracture_with_stress(m, make_fem_model(m, glass, ModelKind::stvk), m.positions,
+                                                analyze_stresses(spike.averaged()), options);
+  const FractureResult b = fracture_with_stress(m, make_fem_model(m, glass, ModelKind::stvk), m.positions,
+                                                analyze_stresses(sustained.averaged()), options);
   EXPECT_TRUE(a.events.empty());
   ASSERT_EQ(b.events.size(), 1u);
   EXPECT_EQ(b.fragments.size(), 2u);

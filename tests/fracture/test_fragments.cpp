@@ -15,8 +15,11 @@ TEST(Fragments, MapsAndMassesMatchRecomputation) {
   std::vector<Index> all(m.tets.size());
   for (Index e = 0; e < m.num_tets(); ++e) all[e] = e;
   CutResult r = cut_mesh(m, {.point = Vec3(1.1, 0, 0), .normal = Vec3(1, 0.1, 0).normalized()}, all);
-  r = cut_mesh(r.mesh, {.point = Vec3(2.2, 0, 0), .normal = Vec3(1, 0, -0.2).normalized()},
-               [&] { std::vector<Index> a(r.mesh.tets.size()); for (Index e = 0; e < r.mesh.num_tets(); ++e) a[e] = e; return a; }());
+  r = cut_mesh(r.mesh, {.point = Vec3(2.2, 0, 0), .normal = Vec3(1, 0, -0.2).normalized()}, [&] {
+    std::vector<Index> a(r.mesh.tets.size());
+    for (Index e = 0; e < r.mesh.num_tets(); ++e) a[e] = e;
+    return a;
+  }());
   const double rho = 7850;
   const std::vector<Fragment> f = extract_fragments(r.mesh, rho);
   ASSERT_EQ(f.size(), 3u);

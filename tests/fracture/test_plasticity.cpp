@@ -55,9 +55,14 @@ TEST(Plasticity, PastYieldKeepsAPermanentSet) {
   const auto x = affine(m, F);
   const auto xr = affine(m, R * F, Vec3(5, -3, 2));
   const PlasticityOptions options{.creep = 0.5};
-  const PlasticResult a = apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, x, compute_stresses(make_fem_model(m, mat, ModelKind::linear), x), {}, options);
-  const PlasticResult b = apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, xr, compute_stresses(make_fem_model(m, mat, ModelKind::corotated), xr), {}, options);
-  const PlasticResult c = apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, x, compute_stresses(make_fem_model(m, mat, ModelKind::corotated), x), {}, options);
+  const PlasticResult a = apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, x,
+                                           compute_stresses(make_fem_model(m, mat, ModelKind::linear), x), {}, options);
+  const PlasticResult b =
+      apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, xr,
+                       compute_stresses(make_fem_model(m, mat, ModelKind::corotated), xr), {}, options);
+  const PlasticResult c =
+      apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, x,
+                       compute_stresses(make_fem_model(m, mat, ModelKind::corotated), x), {}, options);
   ASSERT_EQ(a.yielded.size(), m.tets.size());
   ASSERT_EQ(b.yielded.size(), m.tets.size());
   // Uniform stress: every node gets w = creep (1 - sigma_y / sigma_vm); sigma_vm = E eps = 3 sigma_y.
@@ -69,7 +74,11 @@ TEST(Plasticity, PastYieldKeepsAPermanentSet) {
     EXPECT_LT((a.rest_positions[i] - expected).norm(), 1e-12);
     EXPECT_LT((b.rest_positions[i] - c.rest_positions[i]).norm(), 1e-12);
   }
-  const Aabb box = [&] { Aabb bb; for (const Vec3& p : a.rest_positions) bb.extend(p); return bb; }();
+  const Aabb box = [&] {
+    Aabb bb;
+    for (const Vec3& p : a.rest_positions) bb.extend(p);
+    return bb;
+  }();
   EXPECT_NEAR(box.extent().x(), 4 * (1 + w * eps), 1e-12);
   EXPECT_NEAR(a.plastic_strain[0], w * 3 * mat.yield_stress / mat.youngs_modulus, 1e-12);
   EXPECT_TRUE(a.failed.empty());
@@ -83,7 +92,8 @@ TEST(Plasticity, PastYieldKeepsAPermanentSet) {
   int events = 0;
   PlasticResult r;
   do {
-    r = apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, x, compute_stresses(make_fem_model(m, mat, ModelKind::linear), x), strain,
+    r = apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, x,
+                         compute_stresses(make_fem_model(m, mat, ModelKind::linear), x), strain,
                          {.creep = 0.5, .max_plastic_strain = 0.0105});
     strain = r.plastic_strain;
     ++events;
@@ -101,7 +111,8 @@ TEST(Plasticity, ElasticPartStaysPut) {
   std::vector<Vec3> x = m.positions;
   for (Vec3& p : x)
     if (p.x() > 2) p.x() += eps * (p.x() - 2);
-  const PlasticResult r = apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, x, compute_stresses(make_fem_model(m, mat, ModelKind::stvk), x), {});
+  const PlasticResult r = apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, x,
+                                           compute_stresses(make_fem_model(m, mat, ModelKind::stvk), x), {});
   ASSERT_FALSE(r.yielded.empty());
   EXPECT_LT((r.rotation - Mat3::Identity()).norm(), 1e-12);
   for (Index i = 0; i < m.num_nodes(); ++i) {
@@ -122,12 +133,13 @@ TEST(Plasticity, RestTetsStayPositive) {
   std::vector<Vec3> x = m.positions;
   for (Vec3& p : x) p += rng.uniform_vec3(-0.4, 0.4);
   const auto stress = compute_stresses(make_fem_model(m, mat, ModelKind::stvk), x);
-  const PlasticResult r = apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, x, stress, {}, {.creep = 1.0, .min_volume_fraction = 0.2});
+  const PlasticResult r = apply_plasticity(make_fem_model(m, mat, ModelKind::linear), m.positions, x, stress, {},
+                                           {.creep = 1.0, .min_volume_fraction = 0.2});
   EXPECT_FALSE(r.moved_nodes.empty());
   for (Index e = 0; e < m.num_tets(); ++e) {
     const TetIndices& t = m.tets[e];
-    const double v = signed_volume(r.rest_positions[t[0]], r.rest_positions[t[1]], r.rest_positions[t[2]],
-                                   r.rest_positions[t[3]]);
+    const double v =
+        signed_volume(r.rest_positions[t[0]], r.rest_positions[t[1]], r.rest_positions[t[2]], r.rest_positions[t[3]]);
     EXPECT_GE(v, 0.2 * signed_volume(m, e));
   }
 }

@@ -83,7 +83,8 @@ TEST(InpRead, QuadraticTetsKeepCorners) {
 }
 
 TEST(InpRead, CrlfAndBom) {
-  auto r = parse_inp("\xEF\xBB\xBF*NODE\r\n1,0,0,0\r\n2,1,0,0\r\n3,0,1,0\r\n4,0,0,1\r\n*ELEMENT,TYPE=C3D4H\r\n1,1,2,3,4\r\n", "t.inp");
+  auto r = parse_inp(
+      "\xEF\xBB\xBF*NODE\r\n1,0,0,0\r\n2,1,0,0\r\n3,0,1,0\r\n4,0,0,1\r\n*ELEMENT,TYPE=C3D4H\r\n1,1,2,3,4\r\n", "t.inp");
   ASSERT_OK(r);
   EXPECT_EQ(r->mesh.num_tets(), 1);
 }
@@ -107,7 +108,8 @@ TEST(InpRead, Malformed) {
   expect_error(parse_inp("*NODE\n1\n", "t.inp"), "node number, x, y, z", 2);
   expect_error(parse_inp("*NODE\n1.5,0,0,0\n", "t.inp"), "node number", 2);
   const std::string tet = nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,4\n";  // lines 6-7
-  expect_error(parse_inp(tet + "*NSET,NSET=A,GENERATE\n1,1000000000000000000,1\n", "t.inp"), "larger than the 4 nodes", 9);
+  expect_error(parse_inp(tet + "*NSET,NSET=A,GENERATE\n1,1000000000000000000,1\n", "t.inp"), "larger than the 4 nodes",
+               9);
   expect_error(parse_inp(tet + "*NSET,NSET=A,GENERATE\n4,1\n", "t.inp"), "first <= last", 9);
   expect_error(parse_inp(tet + "*NSET,NSET=A,GENERATE\n1,4,0\n", "t.inp"), "increment > 0", 9);
   expect_error(parse_inp(tet + "*NSET,NSET=A,GENERATE\n1,4,2,1\n", "t.inp"), "first, last", 9);

@@ -62,7 +62,8 @@ TEST(MeditRead, Malformed) {
   expect_error(parse_medit(head + "Vertices\n1000000000000000000\n0 0 0 0\n", "t.mesh"), "section size", 4);
   expect_error(parse_medit(head + "Vertices\n100000\n0 0 0 0\n", "t.mesh"), "larger than the", 4);
   expect_error(parse_medit(head + "Vertices\n-1\n", "t.mesh"), "section size", 4);
-  expect_error(parse_medit(head + "Vertices\n2\n0 0 0 0\n0 0 # padding padding\n", "t.mesh"), "file ends where vertex coordinate", 7);
+  expect_error(parse_medit(head + "Vertices\n2\n0 0 0 0\n0 0 # padding padding\n", "t.mesh"),
+               "file ends where vertex coordinate", 7);
   expect_error(parse_medit(head + "Vertices\n1\n0 nan 0 0\n", "t.mesh"), "finite number", 5);
   expect_error(parse_medit(verts + "Tetrahedra\n1\n1 2 3 5 0\n", "t.mesh"), "vertex index in [1, 4]", 11);
   expect_error(parse_medit(verts + "Tetrahedra\n1\n1 2 0 4 0\n", "t.mesh"), "vertex index in [1, 4]", 11);

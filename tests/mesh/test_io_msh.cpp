@@ -18,7 +18,8 @@ namespace {
 
 /// A jittered box with sparse, shuffled-looking ids and three regions.
 TetMesh sample_mesh(bool with_tags = true) {
-  TetMesh m = make_box_mesh({.min = Vec3(-1, 0.25, 3), .max = Vec3(1.5, 1, 4), .cells = {3, 2, 2}, .jitter = 0.2, .seed = 11});
+  TetMesh m =
+      make_box_mesh({.min = Vec3(-1, 0.25, 3), .max = Vec3(1.5, 1, 4), .cells = {3, 2, 2}, .jitter = 0.2, .seed = 11});
   for (Index i = 0; i < m.num_nodes(); ++i) m.node_ids.push_back(1000 + 7 * FileId((i * 5) % m.num_nodes()));
   for (Index e = 0; e < m.num_tets(); ++e) m.tet_ids.push_back(5 + 3 * FileId(e));
   if (with_tags)
@@ -224,7 +225,8 @@ TEST(MshRead, MalformedInputs) {
       {"inf coordinate", kHeader22 + "$Nodes\n1\n1 0 inf 0\n$EndNodes\n", "finite number"},
       {"duplicate node tag", kHeader22 + "$Nodes\n2\n5 0 0 0\n5 1 0 0\n$EndNodes\n", "appears twice"},
       {"missing end nodes", kHeader22 + "$Nodes\n1\n1 0 0 0\n$Elements\n", "$EndNodes"},
-      {"huge element count", kHeader22 + kNodes22 + "$Elements\n999999999999999999\n$EndElements\n", "bytes that remain"},
+      {"huge element count", kHeader22 + kNodes22 + "$Elements\n999999999999999999\n$EndElements\n",
+       "bytes that remain"},
       {"unknown node", kHeader22 + kNodes22 + "$Elements\n1\n1 4 0 1 2 3 99\n$EndElements\n", "node 99"},
       {"negative node", kHeader22 + kNodes22 + "$Elements\n1\n1 4 0 1 2 3 -1\n$EndElements\n", "node -1"},
       {"truncated elements", kHeader22 + kNodes22 + "$Elements\n1\n1 4 0 1 2", "node tag"},
@@ -234,13 +236,18 @@ TEST(MshRead, MalformedInputs) {
       {"garbage between sections", kHeader22 + "hello\n", "expected a section"},
       {"second nodes", kHeader22 + kNodes22 + kNodes22, "second $Nodes"},
       {"41 block overflow", kHeader41 + "$Nodes\n1 1 1 1\n0 1 0 5\n1\n0 0 0\n$EndNodes\n", "blocks hold more"},
-      {"41 huge blocks", kHeader41 + "$Nodes\n1000000000000000000 1 1 1\n0 1 0 1\n1\n0 0 0\n$EndNodes\n", "node block count"},
+      {"41 huge blocks", kHeader41 + "$Nodes\n1000000000000000000 1 1 1\n0 1 0 1\n1\n0 0 0\n$EndNodes\n",
+       "node block count"},
       {"41 count mismatch", kHeader41 + "$Nodes\n1 3 1 3\n0 1 0 1\n1\n0 0 0\n$EndNodes\n", "3 declared"},
       {"41 entity huge", kHeader41 + "$Entities\n0 0 0 1000000000000\n$EndEntities\n", "bytes that remain"},
-      {"41 element block huge", kHeader41 + "$Nodes\n1 4 1 4\n3 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n$EndNodes\n" +
-                                    "$Elements\n1 1 1 1\n3 1 4 999999999999\n1 1 2 3 4\n$EndElements\n", "blocks hold more"},
-      {"41 unknown type unterminated", kHeader41 + "$Nodes\n1 4 1 4\n3 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n$EndNodes\n" +
-                                           "$Elements\n1 2 1 2\n3 1 777 2\n1 1 2\n", "ends inside an element block"},
+      {"41 element block huge",
+       kHeader41 + "$Nodes\n1 4 1 4\n3 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n$EndNodes\n" +
+           "$Elements\n1 1 1 1\n3 1 4 999999999999\n1 1 2 3 4\n$EndElements\n",
+       "blocks hold more"},
+      {"41 unknown type unterminated",
+       kHeader41 + "$Nodes\n1 4 1 4\n3 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n$EndNodes\n" +
+           "$Elements\n1 2 1 2\n3 1 777 2\n1 1 2\n",
+       "ends inside an element block"},
   };
   for (const BadCase& c : cases) {
     const Result<MeshReadResult> r = parse_msh(c.text, "bad.msh");

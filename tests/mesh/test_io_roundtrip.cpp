@@ -10,7 +10,8 @@ namespace shatter {
 namespace {
 
 TetMesh sample_mesh() {
-  TetMesh m = make_box_mesh({.min = Vec3(-0.5, 0.1, 2), .max = Vec3(0.7, 1.3, 2.01), .cells = {3, 2, 2}, .jitter = 0.2, .seed = 3});
+  TetMesh m = make_box_mesh(
+      {.min = Vec3(-0.5, 0.1, 2), .max = Vec3(0.7, 1.3, 2.01), .cells = {3, 2, 2}, .jitter = 0.2, .seed = 3});
   for (Index i = 0; i < m.num_nodes(); ++i) m.node_ids.push_back(FileId(2 * i + 1));
   for (Index e = 0; e < m.num_tets(); ++e) m.tet_ids.push_back(FileId(100 + e));
   return m;

@@ -17,7 +17,8 @@ void expect_error(const Result<SurfaceReadResult>& r, const std::string& substri
 }
 
 TriSurface box_surface() {
-  return boundary_surface(make_box_mesh({.min = Vec3(-1, 0.1, 0), .max = Vec3(0.3, 1, 2), .cells = {2, 2, 2}, .jitter = 0.2}));
+  return boundary_surface(
+      make_box_mesh({.min = Vec3(-1, 0.1, 0), .max = Vec3(0.3, 1, 2), .cells = {2, 2, 2}, .jitter = 0.2}));
 }
 
 /// Same positions (bit-exact) and triangles; the per-vertex node / per-triangle tet maps are not stored.
@@ -44,8 +45,7 @@ TEST(ObjRead, FormsNegativeIndicesAndPolygons) {
       "t.obj");
   ASSERT_OK(r);
   EXPECT_EQ(r->surface.positions.size(), 4u);
-  EXPECT_EQ(r->surface.triangles,
-            (std::vector<TriIndices>{{0, 1, 2}, {0, 2, 3}, {0, 1, 2}, {0, 2, 3}}));
+  EXPECT_EQ(r->surface.triangles, (std::vector<TriIndices>{{0, 1, 2}, {0, 2, 3}, {0, 1, 2}, {0, 2, 3}}));
   EXPECT_EQ(r->skipped, (std::vector<std::string>{"polygons triangulated: 1", "1 lines"}));
 }
 
@@ -65,8 +65,10 @@ TEST(ObjRead, Malformed) {
 TEST(PlyRead, AsciiAndBinaryVariants) {
   auto a = parse_ply(
       "ply\r\nformat ascii 1.0\r\ncomment hi\r\nelement vertex 4\r\nproperty float x\r\nproperty float y\r\n"
-      "property float z\r\nproperty uchar red\r\nproperty int id\r\nelement face 1\r\nproperty list uchar uint vertex_indices\r\n"
-      "element edge 1\r\nproperty int a\r\nproperty int b\r\nend_header\r\n0 0 0 255 10\r\n1 0 0 0 11\r\n1 1 0 0 12\r\n0 1 0 0 13\r\n"
+      "property float z\r\nproperty uchar red\r\nproperty int id\r\nelement face 1\r\nproperty list uchar uint "
+      "vertex_indices\r\n"
+      "element edge 1\r\nproperty int a\r\nproperty int b\r\nend_header\r\n0 0 0 255 10\r\n1 0 0 0 11\r\n1 1 0 0 "
+      "12\r\n0 1 0 0 13\r\n"
       "4 0 1 2 3\r\n0 1\r\n",
       "t.ply");
   ASSERT_OK(a);
@@ -74,8 +76,9 @@ TEST(PlyRead, AsciiAndBinaryVariants) {
   EXPECT_EQ(a->vertex_ids, (std::vector<FileId>{10, 11, 12, 13}));
   EXPECT_EQ(a->surface.positions[2], Vec3(1, 1, 0));
   // Big endian, float coordinates, short list lengths.
-  std::string be = "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                   "element face 1\nproperty list ushort short vertex_indices\nend_header\n";
+  std::string be =
+      "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list ushort short vertex_indices\nend_header\n";
   auto put_be = [&](const void* p, int n) {
     const auto* b = static_cast<const unsigned char*>(p);
     for (int i = n - 1; i >= 0; --i) be += static_cast<char>(b[i]);
@@ -93,33 +96,40 @@ TEST(PlyRead, AsciiAndBinaryVariants) {
 }
 
 TEST(PlyRead, Malformed) {
-  const std::string h = "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
-                        "element face 1\nproperty list uchar int vertex_indices\nend_header\n";  // 9 lines
+  const std::string h =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n";  // 9 lines
   expect_error(parse_ply("", "t.ply"), "empty file", 1);
   expect_error(parse_ply("plx\n", "t.ply"), "expected 'ply'", 1);
   expect_error(parse_ply("ply\nformat ascii 1.0\n", "t.ply"), "before 'end_header'", 3);
   expect_error(parse_ply("ply\nformat foo 1.0\nend_header\n", "t.ply"), "unknown PLY format", 2);
   expect_error(parse_ply("ply\nend_header\n", "t.ply"), "no 'format'", 3);
   expect_error(parse_ply("ply\nformat ascii 1.0\nelement vertex -1\nend_header\n", "t.ply"), "element count", 3);
-  expect_error(parse_ply("ply\nformat ascii 1.0\nelement vertex 1000000000000000000\nproperty float x\nproperty float y\n"
-                         "property float z\nend_header\n0 0 0\n", "t.ply"), "larger than the", 3);
+  expect_error(
+      parse_ply("ply\nformat ascii 1.0\nelement vertex 1000000000000000000\nproperty float x\nproperty float y\n"
+                "property float z\nend_header\n0 0 0\n",
+                "t.ply"),
+      "larger than the", 3);
   expect_error(parse_ply("ply\nformat ascii 1.0\nelement vertex 5\nend_header\n", "t.ply"), "no properties", 3);
-  expect_error(parse_ply("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n", "t.ply"), "x, y and z", 3);
+  expect_error(parse_ply("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n", "t.ply"),
+               "x, y and z", 3);
   expect_error(parse_ply("ply\nformat ascii 1.0\nelement vertex 1\nproperty quad x\n", "t.ply"), "unknown PLY type", 4);
   expect_error(parse_ply(h + "0 0 0\n1 0 0\n0 1 nan\n3 0 1 2\n", "t.ply"), "finite number", 12);
   expect_error(parse_ply(h + "0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", "t.ply"), "there are 3 vertices", 13);
   expect_error(parse_ply(h + "0 0 0\n1 0 0\n0 1 0\n3 0 1 -1\n", "t.ply"), "there are 3 vertices", 13);
   expect_error(parse_ply(h + "0 0 0\n1 0 0\n0 1 0\n200 0 1 2\n", "t.ply"), "list length 200", 13);
   // Binary: a list length larger than the bytes left, reported by byte offset.
-  std::string bin = "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty list int double x\nproperty float y\n"
-                    "property float z\nend_header\n";
+  std::string bin =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty list int double x\nproperty float y\n"
+      "property float z\nend_header\n";
   const std::size_t start = bin.size();
   const std::int32_t huge = 1000000000;
   bin.append(reinterpret_cast<const char*>(&huge), 4);
   bin.append(8, '\0');
   expect_error(parse_ply(bin, "t.ply"), "must not be a list", 3);
-  std::string bin2 = "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty double x\nproperty double y\n"
-                     "property double z\nend_header\n";
+  std::string bin2 =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty double x\nproperty double y\n"
+      "property double z\nend_header\n";
   const std::size_t start2 = bin2.size();
   bin2.append(24, '\0');
   const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -131,8 +141,10 @@ TEST(PlyRead, Malformed) {
 
 TEST(StlRead, AsciiPolygonsWeldingAndBinaryStartingWithSolid) {
   auto a = parse_stl(
-      "solid cube\nfacet normal 0 0 1\n outer loop\n  vertex 0 0 0\n  vertex 1 0 0\n  vertex 1 1 0\n endloop\nendfacet\n"
-      "FACET NORMAL nan nan nan\nOUTER LOOP\nVERTEX 0 0 0\nVERTEX 1 1 0\nVERTEX -0 1 0\nVERTEX -0.5 0.5 0\nENDLOOP\nENDFACET\n"
+      "solid cube\nfacet normal 0 0 1\n outer loop\n  vertex 0 0 0\n  vertex 1 0 0\n  vertex 1 1 0\n "
+      "endloop\nendfacet\n"
+      "FACET NORMAL nan nan nan\nOUTER LOOP\nVERTEX 0 0 0\nVERTEX 1 1 0\nVERTEX -0 1 0\nVERTEX -0.5 0.5 "
+      "0\nENDLOOP\nENDFACET\n"
       "endsolid cube\nsolid two\nendsolid\n",
       "t.stl");
   ASSERT_OK(a);
@@ -156,10 +168,13 @@ TEST(StlRead, AsciiPolygonsWeldingAndBinaryStartingWithSolid) {
 
 TEST(StlRead, Malformed) {
   expect_error(parse_stl("", "t.stl"), "neither ASCII STL", -1, 0);
-  expect_error(parse_stl("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0\n", "t.stl"), "vertex coordinate", 6);
+  expect_error(parse_stl("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0\n", "t.stl"),
+               "vertex coordinate", 6);
   expect_error(parse_stl("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 inf\n", "t.stl"), "finite number", 4);
-  expect_error(parse_stl("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\nendfacet\nendsolid\n",
-                         "t.stl"), "at least 3 vertices", 7);
+  expect_error(
+      parse_stl("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\nendfacet\nendsolid\n",
+                "t.stl"),
+      "at least 3 vertices", 7);
   expect_error(parse_stl("solid x\nfacet normal 0 0 1\nouter hoop\n", "t.stl"), "expected 'loop'", 3);
   expect_error(parse_stl("solid x\n", "t.stl"), "file ends inside a solid", 2);
   std::string bin(80, 'x');

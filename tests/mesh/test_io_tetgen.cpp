@@ -52,15 +52,17 @@ TEST(TetgenRead, ZeroBasedKeepsIds) {
 }
 
 TEST(TetgenRead, CrlfBomAndShortHeaders) {
-  auto r = parse_tetgen("\xEF\xBB\xBF" "4 3\r\n1 0 0 0\r\n2 1 0 0\r\n3 0 1 0\r\n4 0 0 1\r\n", "c.node",
-                        "1\r\n1 4 3 2 1\r\n", "c.ele");
+  auto r = parse_tetgen(
+      "\xEF\xBB\xBF"
+      "4 3\r\n1 0 0 0\r\n2 1 0 0\r\n3 0 1 0\r\n4 0 0 1\r\n",
+      "c.node", "1\r\n1 4 3 2 1\r\n", "c.ele");
   ASSERT_OK(r);
   EXPECT_EQ(r->mesh.tets[0], (TetIndices{3, 2, 1, 0}));
 }
 
 TEST(TetgenRead, QuadraticTetsKeepCorners) {
   std::string node = "10 3 0 0\n";
-  const double pts[10][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {.5, 0, 0},
+  const double pts[10][3] = {{0, 0, 0},   {1, 0, 0},  {0, 1, 0},  {0, 0, 1},   {.5, 0, 0},
                              {.5, .5, 0}, {0, .5, 0}, {0, 0, .5}, {.5, 0, .5}, {0, .5, .5}};
   for (int i = 0; i < 10; ++i)
     node += std::to_string(i + 1) + " " + std::to_string(pts[i][0]) + " " + std::to_string(pts[i][1]) + " " +
@@ -80,15 +82,17 @@ TEST(TetgenRead, Malformed) {
   expect_error(parse_tetgen("# only a comment\n", "n", ele, "e"), "empty file", 2, "n");
   expect_error(parse_tetgen(node4, "n", "", "e"), "empty file", 1, "e");
   expect_error(parse_tetgen("4 3 0 0\n1 0 0 0\n2 1 0 0\n", "n", ele, "e"), "larger than the", 1);
-  expect_error(parse_tetgen("4 3 0 0\n1 0 0 0\n2 1 0 0 # a comment that is long enough to pass the check\n", "n", ele, "e"),
-               "file ends after 2 of 4 points", 4);
+  expect_error(
+      parse_tetgen("4 3 0 0\n1 0 0 0\n2 1 0 0 # a comment that is long enough to pass the check\n", "n", ele, "e"),
+      "file ends after 2 of 4 points", 4);
   expect_error(parse_tetgen("1000000000000000000 3 0 0\n1 0 0 0\n", "n", ele, "e"), "point count", 1);
   expect_error(parse_tetgen("2000000 3 0 0\n1 0 0 0\n", "n", ele, "e"), "larger than the", 1);
   expect_error(parse_tetgen("4 3 1000000000000000000 0\n", "n", ele, "e"), "attribute count", 1);
   expect_error(parse_tetgen("-4 3 0 0\n", "n", ele, "e"), "point count", 1);
   expect_error(parse_tetgen("4 2 0 0\n", "n", ele, "e"), "dimension", 1);
   expect_error(parse_tetgen("4 3 0 0\n1 0 0 0\n2 nan 0 0\n3 0 1 0\n4 0 0 1\n", "n", ele, "e"), "finite number", 3);
-  expect_error(parse_tetgen("4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 # short row\n4 0 0 1\n", "n", ele, "e"), "line ends where coordinate", 4);
+  expect_error(parse_tetgen("4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 # short row\n4 0 0 1\n", "n", ele, "e"),
+               "line ends where coordinate", 4);
   expect_error(parse_tetgen("4 3 0 0\n1 0 0 0\n1 1 0 0\n3 0 1 0\n4 0 0 1\n", "n", ele, "e"), "defined twice", 3);
   expect_error(parse_tetgen("4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1 8\n", "n", ele, "e"), "unexpected '8'", 5);
   expect_error(parse_tetgen(node4 + "5 1 1 1\n", "n", ele, "e"), "after the 4 points", 6);

@@ -15,7 +15,8 @@ namespace shatter {
 namespace {
 
 TetMesh vtk_sample_mesh() {
-  TetMesh m = make_box_mesh({.min = Vec3(-2, 0, 0.5), .max = Vec3(1, 1, 1.5), .cells = {3, 2, 2}, .jitter = 0.2, .seed = 5});
+  TetMesh m =
+      make_box_mesh({.min = Vec3(-2, 0, 0.5), .max = Vec3(1, 1, 1.5), .cells = {3, 2, 2}, .jitter = 0.2, .seed = 5});
   for (Index i = 0; i < m.num_nodes(); ++i) m.node_ids.push_back(50 + 3 * FileId(m.num_nodes() - i));
   for (Index e = 0; e < m.num_tets(); ++e) m.tet_ids.push_back((FileId(1) << 40) + 9 * FileId(e));  // needs 64 bits
   for (Index e = 0; e < m.num_tets(); ++e) m.tet_tags.push_back(-3 + e % 5);
@@ -184,15 +185,26 @@ TEST(VtkRead, MalformedInputs) {
       {"tet with 3 points", head + pts + "CELLS 1 4\n3 0 1 2\nCELL_TYPES 1\n10\n", "with 3 points"},
       {"type count", head + pts + "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 2\n10 10\n", "CELL_TYPES lists 2"},
       {"no tets", head + pts + "CELLS 1 4\n3 0 1 2\nCELL_TYPES 1\n5\n", "no tetrahedra"},
-      {"data count", head + pts + "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\nCELL_DATA 1\nFIELD f 1\ntet_id 1 2 int\n1 2\n", "expected 1"},
+      {"data count",
+       head + pts + "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\nCELL_DATA 1\nFIELD f 1\ntet_id 1 2 int\n1 2\n",
+       "expected 1"},
       {"unknown keyword", head + pts + "BANANAS 3\n", "unexpected keyword"},
-      {"51 offsets", head51 + pts + "CELLS 2 4\nOFFSETS vtktypeint64\n1 4\nCONNECTIVITY vtktypeint64\n0 1 2 3\nCELL_TYPES 1\n10\n", "first cell offset"},
-      {"51 offsets decrease", head51 + pts + "CELLS 3 4\nOFFSETS vtktypeint64\n0 5 4\nCONNECTIVITY vtktypeint64\n0 1 2 3\n", "decrease"},
-      {"51 last offset", head51 + pts + "CELLS 2 4\nOFFSETS vtktypeint64\n0 3\nCONNECTIVITY vtktypeint64\n0 1 2 3\n", "last cell offset"},
+      {"51 offsets",
+       head51 + pts + "CELLS 2 4\nOFFSETS vtktypeint64\n1 4\nCONNECTIVITY vtktypeint64\n0 1 2 3\nCELL_TYPES 1\n10\n",
+       "first cell offset"},
+      {"51 offsets decrease",
+       head51 + pts + "CELLS 3 4\nOFFSETS vtktypeint64\n0 5 4\nCONNECTIVITY vtktypeint64\n0 1 2 3\n", "decrease"},
+      {"51 last offset", head51 + pts + "CELLS 2 4\nOFFSETS vtktypeint64\n0 3\nCONNECTIVITY vtktypeint64\n0 1 2 3\n",
+       "last cell offset"},
       {"51 float offsets", head51 + pts + "CELLS 2 4\nOFFSETS double\n0 4\n", "integer type"},
-      {"tag too wide", head + pts + "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\nCELL_DATA 1\nSCALARS tag long\nLOOKUP_TABLE default\n99999999999\n", "32 bits"},
+      {"tag too wide",
+       head + pts +
+           "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\nCELL_DATA 1\nSCALARS tag long\nLOOKUP_TABLE default\n99999999999\n",
+       "32 bits"},
       {"field huge", head + pts + "FIELD f 100000000000\n", "bad field array count"},
-      {"binary no newline", "# vtk DataFile Version 4.2\nt\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 1 float x0123456789abcdef", "end of the line"},
+      {"binary no newline",
+       "# vtk DataFile Version 4.2\nt\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 1 float x0123456789abcdef",
+       "end of the line"},
   };
   for (const Case& c : cases) {
     const Result<MeshReadResult> r = parse_vtk(c.text, "bad.vtk");

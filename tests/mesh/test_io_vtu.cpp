@@ -16,8 +16,12 @@ namespace shatter {
 namespace {
 
 TetMesh vtu_sample_mesh() {
-  TetMesh m = make_box_mesh({.min = Vec3(0, -1, -1), .max = Vec3(2, 1, 0), .cells = {2, 3, 2}, .pattern = BoxMeshDef::Pattern::five,
-                             .jitter = 0.2, .seed = 3});
+  TetMesh m = make_box_mesh({.min = Vec3(0, -1, -1),
+                             .max = Vec3(2, 1, 0),
+                             .cells = {2, 3, 2},
+                             .pattern = BoxMeshDef::Pattern::five,
+                             .jitter = 0.2,
+                             .seed = 3});
   for (Index i = 0; i < m.num_nodes(); ++i) m.node_ids.push_back(7 + 11 * FileId(i));
   for (Index e = 0; e < m.num_tets(); ++e) m.tet_ids.push_back(FileId(m.num_tets()) - e + 1000);
   for (Index e = 0; e < m.num_tets(); ++e) m.tet_tags.push_back(e % 3);
@@ -74,7 +78,8 @@ TEST(VtuRoundTrip, AsciiAndBinaryWithFields) {
     ASSERT_EQ(r->mesh.positions.size(), m.positions.size());
     for (std::size_t i = 0; i < m.positions.size(); ++i)
       for (int k = 0; k < 3; ++k)
-        EXPECT_EQ(std::bit_cast<std::uint64_t>(m.positions[i][k]), std::bit_cast<std::uint64_t>(r->mesh.positions[i][k]));
+        EXPECT_EQ(std::bit_cast<std::uint64_t>(m.positions[i][k]),
+                  std::bit_cast<std::uint64_t>(r->mesh.positions[i][k]));
     EXPECT_EQ(r->mesh.tets, m.tets);
     EXPECT_EQ(r->mesh.node_ids, m.node_ids);
     EXPECT_EQ(r->mesh.tet_ids, m.tet_ids);
@@ -112,12 +117,14 @@ std::string meshio_like(bool separate_header_encoding) {
   const std::vector<std::int32_t> phys = {1, 8};
   return "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
          "<!-- written by a tool -->\n<UnstructuredGrid>\n<Piece NumberOfPoints=\"5\" NumberOfCells=\"2\">\n<Points>\n"
-         "<DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"binary\">\n" + block(raw(pts)) +
-         "\n</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"binary\">\n" + block(raw(conn)) +
-         "\n</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"binary\">\n" + block(raw(offs)) +
-         "\n</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"binary\">\n" + block(raw(types)) +
-         "\n</DataArray>\n</Cells>\n<CellData>\n<DataArray type=\"Int32\" Name=\"gmsh:physical\" format=\"binary\">\n" + block(raw(phys)) +
-         "\n</DataArray>\n</CellData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
+         "<DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"binary\">\n" +
+         block(raw(pts)) +
+         "\n</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"binary\">\n" +
+         block(raw(conn)) + "\n</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"binary\">\n" +
+         block(raw(offs)) + "\n</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"binary\">\n" +
+         block(raw(types)) +
+         "\n</DataArray>\n</Cells>\n<CellData>\n<DataArray type=\"Int32\" Name=\"gmsh:physical\" format=\"binary\">\n" +
+         block(raw(phys)) + "\n</DataArray>\n</CellData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
 }
 
 TEST(VtuRead, MeshioLayoutBothBase64Styles) {
@@ -154,7 +161,8 @@ TEST(VtuRead, MalformedInputs) {
       {"not xml", "hello", "text outside the root"},
       {"wrong root", "<Foo/>", "<VTKFile>"},
       {"wrong type", "<VTKFile type=\"PolyData\"/>", "UnstructuredGrid"},
-      {"compressed", replaced("header_type=\"UInt64\"", "header_type=\"UInt64\" compressor=\"vtkZLibDataCompressor\""), "compressed VTU not supported"},
+      {"compressed", replaced("header_type=\"UInt64\"", "header_type=\"UInt64\" compressor=\"vtkZLibDataCompressor\""),
+       "compressed VTU not supported"},
       {"appended", ascii + "<AppendedData encoding=\"raw\">_\x01\x02</AppendedData>", "AppendedData"},
       {"unterminated", ascii.substr(0, ascii.size() / 2), "file ends inside"},
       {"mismatched", replaced("</Points>", "</Cells>"), "does not match"},
@@ -166,13 +174,20 @@ TEST(VtuRead, MalformedInputs) {
       {"huge points", replaced("NumberOfPoints=\"", "NumberOfPoints=\"1000000000000000000"), "NumberOfPoints"},
       {"negative cells", replaced("NumberOfCells=\"", "NumberOfCells=\"-"), "out of range"},
       {"more points", replaced("NumberOfPoints=\"", "NumberOfPoints=\"9"), "fewer values"},
-      {"nan point", replaced("Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">\n          ",
-                             "Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">\n          nan "), "finite number"},
+      {"nan point",
+       replaced("Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">\n          ",
+                "Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">\n          nan "),
+       "finite number"},
       {"components", replaced("NumberOfComponents=\"3\"", "NumberOfComponents=\"2\""), "NumberOfComponents=\"3\""},
-      {"bad type", replaced("type=\"Float64\" Name=\"Points\"", "type=\"Float65\" Name=\"Points\""), "unknown or missing type"},
+      {"bad type", replaced("type=\"Float64\" Name=\"Points\"", "type=\"Float65\" Name=\"Points\""),
+       "unknown or missing type"},
       {"no connectivity", replaced("Name=\"connectivity\"", "Name=\"conn\""), "connectivity, offsets and types"},
-      {"bad format", replaced("Name=\"offsets\" format=\"ascii\"", "Name=\"offsets\" format=\"hex\""), "unknown DataArray format"},
-      {"offsets decrease", replaced("Name=\"offsets\" format=\"ascii\">\n          4 8", "Name=\"offsets\" format=\"ascii\">\n          8 4"), "decrease"},
+      {"bad format", replaced("Name=\"offsets\" format=\"ascii\"", "Name=\"offsets\" format=\"hex\""),
+       "unknown DataArray format"},
+      {"offsets decrease",
+       replaced("Name=\"offsets\" format=\"ascii\">\n          4 8",
+                "Name=\"offsets\" format=\"ascii\">\n          8 4"),
+       "decrease"},
       {"second root", ascii + "<VTKFile/>", "second root"},
   };
   for (const Case& c : cases) {

@@ -22,8 +22,12 @@ TetMesh unit_tet() {
 TEST(BoxMesh, VolumeAndOrientation) {
   for (auto pattern : {BoxMeshDef::Pattern::six, BoxMeshDef::Pattern::five}) {
     for (double jitter : {0.0, 0.2}) {
-      const TetMesh m = make_box_mesh({.min = Vec3(-1, 0, 0), .max = Vec3(1, 0.5, 3), .cells = {4, 3, 5},
-                                       .pattern = pattern, .jitter = jitter, .seed = 7});
+      const TetMesh m = make_box_mesh({.min = Vec3(-1, 0, 0),
+                                       .max = Vec3(1, 0.5, 3),
+                                       .cells = {4, 3, 5},
+                                       .pattern = pattern,
+                                       .jitter = jitter,
+                                       .seed = 7});
       EXPECT_EQ(m.num_nodes(), 5 * 4 * 6);
       EXPECT_EQ(m.num_tets(), 4 * 3 * 5 * (pattern == BoxMeshDef::Pattern::six ? 6 : 5));
       EXPECT_NEAR(total_volume(m), 2.0 * 0.5 * 3.0, 1e-12);

@@ -37,7 +37,8 @@ TEST(CmdMesh, ShapeFileAndErrors) {
   ASSERT_EQ(ok.status, 0) << ok.output;
   EXPECT_EQ(nlohmann::json::parse(ok.output)["reference_kind"], "extrapolated from h/2");
 
-  std::ofstream(shape) << R"({"tets": 2000, "shape": {"type": "union", "children": [{"type": "sphere", "radius": -1}]}})";
+  std::ofstream(shape)
+      << R"({"tets": 2000, "shape": {"type": "union", "children": [{"type": "sphere", "radius": -1}]}})";
   auto bad = test::run_command(test::cli_path() + " mesh --shape " + shape + " 2>&1");
   EXPECT_EQ(bad.status, 3);
   EXPECT_NE(bad.output.find("shape.children[0].radius"), std::string::npos) << bad.output;
@@ -75,12 +76,13 @@ TEST(CmdMesh, MethodChoice) {
   const auto jb = nlohmann::json::parse(box.output);
   EXPECT_EQ(jb["method"], "box-csg");
   EXPECT_LT(std::abs(jb["volume_error"].get<double>()), 1e-12);
-  auto stuffed = test::run_command(cli + " mesh --primitive box --size 0.3 0.2 0.1 --tets 500 --method stuffing --json");
+  auto stuffed =
+      test::run_command(cli + " mesh --primitive box --size 0.3 0.2 0.1 --tets 500 --method stuffing --json");
   ASSERT_EQ(stuffed.status, 0) << stuffed.output;
   EXPECT_EQ(nlohmann::json::parse(stuffed.output)["method"], "stuffing");
   // The vase asset goes to the revolve mesher.
-  auto vase = test::run_command(cli + " mesh --shape " + std::string(SHATTER_SOURCE_DIR) +
-                                "/assets/shapes/vase.json --json");
+  auto vase =
+      test::run_command(cli + " mesh --shape " + std::string(SHATTER_SOURCE_DIR) + "/assets/shapes/vase.json --json");
   ASSERT_EQ(vase.status, 0) << vase.output;
   EXPECT_EQ(nlohmann::json::parse(vase.output)["method"], "revolve");
   // A sphere is neither; an unknown method is a usage error.

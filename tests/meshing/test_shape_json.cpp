@@ -14,7 +14,8 @@ namespace {
 
 TEST(ShapeJson, PrimitivesAndTransforms) {
   auto r = parse_shape_json(R"({"name": "s", "edge_length": 0.01, "tets": 500,
-    "shape": {"type": "sphere", "radius": 0.1, "translate": [1, 0, 0], "scale": 2}})", "s.json");
+    "shape": {"type": "sphere", "radius": 0.1, "translate": [1, 0, 0], "scale": 2}})",
+                            "s.json");
   ASSERT_OK(r);
   EXPECT_EQ(r->name, "s");
   EXPECT_EQ(r->edge_length, 0.01);
@@ -32,21 +33,25 @@ TEST(ShapeJson, PrimitivesAndTransforms) {
 TEST(ShapeJson, CsgOperations) {
   auto r = parse_shape_json(R"({"shape": {"type": "difference", "children": [
       {"type": "box", "size": [1, 1, 1]},
-      {"type": "cylinder", "radius": 0.2, "height": 2}]}})", "d.json");
+      {"type": "cylinder", "radius": 0.2, "height": 2}]}})",
+                            "d.json");
   ASSERT_OK(r);
-  EXPECT_GT(r->sdf(Vec3(0, 0, 0)), 0.0);     // in the hole
+  EXPECT_GT(r->sdf(Vec3(0, 0, 0)), 0.0);      // in the hole
   EXPECT_LT(r->sdf(Vec3(0.4, 0, 0.4)), 0.0);  // in the wall
   auto u = parse_shape_json(R"({"shape": {"type": "smooth_union", "blend": 0.1, "children": [
-      {"type": "sphere", "radius": 0.5}, {"type": "sphere", "radius": 0.5, "translate": [0.9, 0, 0]}]}})", "u.json");
+      {"type": "sphere", "radius": 0.5}, {"type": "sphere", "radius": 0.5, "translate": [0.9, 0, 0]}]}})",
+                            "u.json");
   ASSERT_OK(u);
   // Smooth union fills the neck between the spheres: below the plain minimum there.
   const Vec3 neck(0.45, 0.2, 0);
   EXPECT_LT(u->sdf(neck), std::min(neck.norm() - 0.5, (neck - Vec3(0.9, 0, 0)).norm() - 0.5));
-  auto v = parse_shape_json(R"({"shape": {"type": "revolution", "profile": [[0, 0], [0.1, 0], [0.1, 0.2], [0, 0.2]]}})", "v.json");
+  auto v = parse_shape_json(R"({"shape": {"type": "revolution", "profile": [[0, 0], [0.1, 0], [0.1, 0.2], [0, 0.2]]}})",
+                            "v.json");
   ASSERT_OK(v);
   EXPECT_NEAR(*v->sdf.analytic_volume(), std::numbers::pi * 0.01 * 0.2, 1e-12);
   EXPECT_NEAR(v->sdf(Vec3(0, 0.1, 0.05)), -0.05, 1e-12);
-  auto e = parse_shape_json(R"({"shape": {"type": "extrusion", "depth": 0.5, "polygon": [[0, 0], [1, 0], [0, 1]]}})", "e.json");
+  auto e = parse_shape_json(R"({"shape": {"type": "extrusion", "depth": 0.5, "polygon": [[0, 0], [1, 0], [0, 1]]}})",
+                            "e.json");
   ASSERT_OK(e);
   EXPECT_NEAR(*e->sdf.analytic_volume(), 0.25, 1e-12);
 }
@@ -54,7 +59,8 @@ TEST(ShapeJson, CsgOperations) {
 TEST(ShapeJson, MeshedRevolutionMatchesPappus) {
   // A thin-walled cup: revolution of a closed profile polygon.
   auto r = parse_shape_json(R"({"shape": {"type": "revolution", "profile":
-      [[0, 0], [0.05, 0], [0.05, 0.08], [0.04, 0.08], [0.04, 0.01], [0, 0.01]]}})", "cup.json");
+      [[0, 0], [0.05, 0], [0.05, 0.08], [0.04, 0.08], [0.04, 0.01], [0, 0.01]]}})",
+                            "cup.json");
   ASSERT_OK(r);
   auto m = stuff_tets(r->sdf, {.edge_length = 0.0025});
   ASSERT_OK(m);
@@ -77,15 +83,19 @@ TEST(ShapeJson, BadFilesNameThePath) {
       {R"({"shape": {"type": "blob"}})", "shape.type", "unknown shape type"},
       {R"({"shape": {"radius": 1}})", "shape.type", "missing"},
       {R"({"shape": {"type": "union", "children": [{"type": "sphere", "radius": 1}, {"type": "sphere", "radius": 1},
-         {"type": "cylinder", "radius": 0, "height": 1}]}})", "shape.children[2].radius", "> 0"},
+         {"type": "cylinder", "radius": 0, "height": 1}]}})",
+       "shape.children[2].radius", "> 0"},
       {R"({"shape": {"type": "union", "children": []}})", "shape.children", "empty"},
       {R"({"shape": {"type": "box", "size": [1, 2]}})", "shape.size", "3 numbers"},
       {R"({"shape": {"type": "box", "size": [1, 2, 0]}})", "shape.size[2]", "> 0"},
-      {R"({"shape": {"type": "torus", "major_radius": 1, "minor_radius": 2}})", "shape.minor_radius", "minor_radius < major_radius"},
+      {R"({"shape": {"type": "torus", "major_radius": 1, "minor_radius": 2}})", "shape.minor_radius",
+       "minor_radius < major_radius"},
       {R"({"shape": {"type": "revolution", "profile": [[0, 0], [1, 0]]}})", "shape.profile", "at least 3"},
       {R"({"shape": {"type": "revolution", "profile": [[0, 0], [-1, 0], [0, 1]]}})", "shape.profile[1]", "r >= 0"},
-      {R"({"shape": {"type": "extrusion", "depth": 1, "polygon": [[0, 0], [1, 1], [2, 2]]}})", "shape.polygon", "non-zero area"},
-      {R"({"shape": {"type": "smooth_union", "children": [{"type": "sphere", "radius": 1}]}})", "shape.blend", "missing"},
+      {R"({"shape": {"type": "extrusion", "depth": 1, "polygon": [[0, 0], [1, 1], [2, 2]]}})", "shape.polygon",
+       "non-zero area"},
+      {R"({"shape": {"type": "smooth_union", "children": [{"type": "sphere", "radius": 1}]}})", "shape.blend",
+       "missing"},
       {R"({"shape": {"type": "sphere", "radius": 1, "translate": [0, "x", 0]}})", "shape.translate[1]", "number"},
       {R"({"shape": {"type": "surface", "file": "a.obj"}})", "shape.file", "no surface reader"},
       {R"({"shap": {}})", "shap", "unknown key"},
@@ -104,7 +114,8 @@ TEST(ShapeJson, BadFilesNameThePath) {
   }
   auto syntax = parse_shape_json("{\"shape\": {", "broken.json");
   ASSERT_FALSE(syntax.ok());
-  EXPECT_NE(syntax.error().to_string().find("broken.json: invalid JSON"), std::string::npos) << syntax.error().to_string();
+  EXPECT_NE(syntax.error().to_string().find("broken.json: invalid JSON"), std::string::npos)
+      << syntax.error().to_string();
   auto missing = read_shape_json("/nonexistent/shape.json");
   ASSERT_FALSE(missing.ok());
 }

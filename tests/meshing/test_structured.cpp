@@ -34,8 +34,8 @@ bool has_node(const TetMesh& m, const Vec3& p) {
 // The cinder block: 390 x 190 x 190 mm minus two 130 x 120 mm cores through the height.
 Sdf cinder_block() {
   const Sdf core = Sdf::box(Vec3(0.065, 0.15, 0.06));
-  return Sdf::subtract({Sdf::box(Vec3(0.195, 0.095, 0.095)), core.translated(Vec3(-0.095, 0, 0)),
-                        core.translated(Vec3(0.095, 0, 0))});
+  return Sdf::subtract(
+      {Sdf::box(Vec3(0.195, 0.095, 0.095)), core.translated(Vec3(-0.095, 0, 0)), core.translated(Vec3(0.095, 0, 0))});
 }
 constexpr double kCinderVolume = 0.39 * 0.19 * 0.19 - 2 * 0.13 * 0.19 * 0.12;
 
@@ -52,11 +52,11 @@ TEST(BoxCsg, DetectsBoxTrees) {
 
 TEST(BoxCsg, ExactVolumeSharpCornersClosed) {
   // Cinder block, and an L-shaped union with a rotated (90 degrees), scaled box intersected away.
-  const Sdf l_shape = Sdf::intersect(
-      {Sdf::unite({Sdf::box(Vec3(0.2, 0.05, 0.1)),
-                   Sdf::box(Vec3(0.1, 0.05, 0.025)).transformed(Vec3(-0.15, 0.1, 0),
-                                                                rotation_from_euler_deg(Vec3(90, 0, 0)), 2.0)}),
-       Sdf::box(Vec3(1, 1, 0.08))});
+  const Sdf l_shape =
+      Sdf::intersect({Sdf::unite({Sdf::box(Vec3(0.2, 0.05, 0.1)),
+                                  Sdf::box(Vec3(0.1, 0.05, 0.025))
+                                      .transformed(Vec3(-0.15, 0.1, 0), rotation_from_euler_deg(Vec3(90, 0, 0)), 2.0)}),
+                      Sdf::box(Vec3(1, 1, 0.08))});
   // The rotated, doubled box spans x [-0.35, 0.05], y [0.05, 0.15], z [-0.1, 0.1] and sits on the
   // first; the slab cuts both to z in [-0.08, 0.08].
   const double l_volume = 0.4 * 0.1 * 0.16 + 0.4 * 0.1 * 0.16;
@@ -155,8 +155,17 @@ TEST(Revolve, CylinderOnTheAxisIsTheExactPrism) {
 // toward the axis (angular levels) keep them fat. The mesh stays conforming (closed 2-manifold
 // boundary) and the volume stays that of the chordal polygon's sweep (within 1 % of Pappus).
 TEST(Revolve, AngularLevelsKeepTetsNearTheAxisFat) {
-  const Sdf bowl = Sdf::revolution({{0.0, 0.0}, {0.04, 0.0}, {0.04, 0.008}, {0.07, 0.022}, {0.095, 0.048}, {0.108, 0.08},
-                                    {0.098, 0.08}, {0.086, 0.052}, {0.064, 0.03}, {0.036, 0.018}, {0.0, 0.018}});
+  const Sdf bowl = Sdf::revolution({{0.0, 0.0},
+                                    {0.04, 0.0},
+                                    {0.04, 0.008},
+                                    {0.07, 0.022},
+                                    {0.095, 0.048},
+                                    {0.108, 0.08},
+                                    {0.098, 0.08},
+                                    {0.086, 0.052},
+                                    {0.064, 0.03},
+                                    {0.036, 0.018},
+                                    {0.0, 0.018}});
   RevolveReport rep;
   auto m = mesh_revolution(bowl, {.target_tets = 3000}, &rep);
   ASSERT_OK(m);

@@ -88,9 +88,10 @@ TEST(Stuffing, QualityOnCsgShapes) {
   auto m = stuff_tets(block, {.edge_length = 0.02});
   ASSERT_OK(m);
   check_mesh(*m, -2);  // genus 2
-  const Sdf blob = Sdf::smooth_unite({Sdf::sphere(0.1), Sdf::ellipsoid(Vec3(0.05, 0.08, 0.04)).translated(Vec3(0.1, 0.08, 0)),
-                                      Sdf::capsule(0.03, 0.05).rotated(rotation_from_euler_deg(Vec3(0, 0, 60))).translated(Vec3(-0.1, 0, 0))},
-                                     0.03);
+  const Sdf blob = Sdf::smooth_unite(
+      {Sdf::sphere(0.1), Sdf::ellipsoid(Vec3(0.05, 0.08, 0.04)).translated(Vec3(0.1, 0.08, 0)),
+       Sdf::capsule(0.03, 0.05).rotated(rotation_from_euler_deg(Vec3(0, 0, 60))).translated(Vec3(-0.1, 0, 0))},
+      0.03);
   for (double h : {0.03, 0.015, 0.0075}) {
     auto b = stuff_tets(blob, {.edge_length = h});
     ASSERT_OK(b);
@@ -112,7 +113,9 @@ TEST(Stuffing, RandomShapesGiveValidMeshes) {
         case 0: parts.push_back(Sdf::sphere(rng.uniform(0.04, 0.08)).translated(t)); break;
         case 1: parts.push_back(Sdf::box(rng.uniform_vec3(0.03, 0.07)).transformed(t, r)); break;
         case 2: parts.push_back(Sdf::ellipsoid(rng.uniform_vec3(0.03, 0.08)).transformed(t, r)); break;
-        default: parts.push_back(Sdf::cylinder(rng.uniform(0.03, 0.06), rng.uniform(0.03, 0.08)).transformed(t, r)); break;
+        default:
+          parts.push_back(Sdf::cylinder(rng.uniform(0.03, 0.06), rng.uniform(0.03, 0.08)).transformed(t, r));
+          break;
       }
     }
     const Sdf shape = (trial % 2) ? Sdf::smooth_unite(parts, 0.02) : Sdf::unite(parts);
@@ -129,12 +132,14 @@ TEST(Stuffing, TargetTetCount) {
     auto m = stuff_tets(Sdf::cylinder(0.05, 0.2), {.target_tets = n}, &r);
     ASSERT_OK(m);
     EXPECT_NEAR(static_cast<double>(m->num_tets()) / static_cast<double>(n), 1.0, 0.15) << n;
-    EXPECT_NEAR(r.edge_length, std::cbrt(12.0 * total_volume(*m) / static_cast<double>(m->num_tets())), 0.3 * r.edge_length);
+    EXPECT_NEAR(r.edge_length, std::cbrt(12.0 * total_volume(*m) / static_cast<double>(m->num_tets())),
+                0.3 * r.edge_length);
   }
 }
 
 TEST(Stuffing, DeterministicAcrossRunsAndThreads) {
-  const Sdf s = Sdf::smooth_unite({Sdf::sphere(0.1), Sdf::box(Vec3(0.05, 0.15, 0.05)).rotated(rotation_from_euler_deg(Vec3(10, 20, 30)))}, 0.02);
+  const Sdf s = Sdf::smooth_unite(
+      {Sdf::sphere(0.1), Sdf::box(Vec3(0.05, 0.15, 0.05)).rotated(rotation_from_euler_deg(Vec3(10, 20, 30)))}, 0.02);
   const int saved = num_threads();
   set_num_threads(1);
   auto a = stuff_tets(s, {.edge_length = 0.01});
@@ -199,7 +204,9 @@ std::vector<std::array<double, 9>> boundary_triangles_by_position(const TetMesh&
   for (const TriIndices& t : s.triangles) {
     // Rotate so the smallest corner (lexicographic) comes first: same triangle, same key.
     std::array<Vec3, 3> p = {s.positions[t[0]], s.positions[t[1]], s.positions[t[2]]};
-    auto less = [](const Vec3& a, const Vec3& b) { return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3); };
+    auto less = [](const Vec3& a, const Vec3& b) {
+      return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+    };
     int first = 0;
     for (int k = 1; k < 3; ++k)
       if (less(p[k], p[first])) first = k;
@@ -215,7 +222,8 @@ std::vector<std::array<double, 9>> boundary_triangles_by_position(const TetMesh&
 // Grading coarsens the inside only: the boundary surface is the same triangles at the same
 // positions, the volume is the same, angles stay in bounds and the inside edges grow.
 TEST(StuffingGrading, CoarsensTheInsideKeepingBoundaryVolumeAndBounds) {
-  const Sdf shape = Sdf::smooth_unite({Sdf::sphere(0.1), Sdf::box(Vec3(0.06, 0.16, 0.06)).rotated(rotation_from_euler_deg(Vec3(10, 20, 30)))}, 0.02);
+  const Sdf shape = Sdf::smooth_unite(
+      {Sdf::sphere(0.1), Sdf::box(Vec3(0.06, 0.16, 0.06)).rotated(rotation_from_euler_deg(Vec3(10, 20, 30)))}, 0.02);
   const double h = 0.008;
   StuffingReport ru, rg;
   auto uniform = stuff_tets(shape, {.edge_length = h}, &ru);
@@ -283,7 +291,8 @@ std::pair<double, double> boundary_deviation(const TetMesh& m, const Sdf& s, dou
   int n = 0;
   for (const TriIndices& t : b.triangles) {
     const Vec3 p0 = b.positions[t[0]], p1 = b.positions[t[1]], p2 = b.positions[t[2]];
-    for (const Vec3& q : {Vec3((p0 + p1 + p2) / 3.0), Vec3(0.5 * (p0 + p1)), Vec3(0.5 * (p1 + p2)), Vec3(0.5 * (p2 + p0))}) {
+    for (const Vec3& q :
+         {Vec3((p0 + p1 + p2) / 3.0), Vec3(0.5 * (p0 + p1)), Vec3(0.5 * (p1 + p2)), Vec3(0.5 * (p2 + p0))}) {
       const double d = std::abs(s(q)) / h;
       sum += d;
       worst = std::max(worst, d);
@@ -301,7 +310,9 @@ TEST(StuffingSharpen, CreasesComeBackInsideTheBounds) {
   // hole through it (a torus, 0).
   const std::pair<Sdf, int> shapes[] = {
       {Sdf::box(Vec3(0.1, 0.05, 0.075)).rotated(rotation_from_euler_deg(Vec3(20, 30, 10))), 2},
-      {Sdf::subtract({Sdf::cylinder(0.05, 0.1).rotated(rotation_from_euler_deg(Vec3(10, 0, 20))), Sdf::box(Vec3(0.02, 0.15, 0.02))}), 0},
+      {Sdf::subtract({Sdf::cylinder(0.05, 0.1).rotated(rotation_from_euler_deg(Vec3(10, 0, 20))),
+                      Sdf::box(Vec3(0.02, 0.15, 0.02))}),
+       0},
   };
   const double h = 0.01;
   for (const auto& [s, euler] : shapes) {
@@ -313,8 +324,8 @@ TEST(StuffingSharpen, CreasesComeBackInsideTheBounds) {
     EXPECT_GT(r.sharpened, 0);
     const auto [mean_s, max_s] = boundary_deviation(*sharp, s, h);
     const auto [mean_r, max_r] = boundary_deviation(*round, s, h);
-    std::printf("boundary deviation / h: sharpened mean %.4f max %.4f, rounded mean %.4f max %.4f (%lld moves)\n", mean_s, max_s,
-                mean_r, max_r, static_cast<long long>(r.sharpened));
+    std::printf("boundary deviation / h: sharpened mean %.4f max %.4f, rounded mean %.4f max %.4f (%lld moves)\n",
+                mean_s, max_s, mean_r, max_r, static_cast<long long>(r.sharpened));
     EXPECT_LT(mean_s, mean_r);
     {
       SCOPED_TRACE("rounded");

@@ -44,10 +44,10 @@ struct Alphas {
 
 // One configuration of a BCC tet after warping.
 struct Config {
-  std::array<int, 4> kind{};    // -1 inside, +1 outside (not warped), 0 warped onto the surface
-  std::array<int, 4> dir{};     // warp direction (kind 0)
-  std::array<double, 4> f{};    // warp distance as a fraction of that edge's length, [0, alpha]
-  std::array<double, 6> t{};    // cut parameter from the edge's lower local vertex, [alpha, 1 - alpha]
+  std::array<int, 4> kind{};  // -1 inside, +1 outside (not warped), 0 warped onto the surface
+  std::array<int, 4> dir{};   // warp direction (kind 0)
+  std::array<double, 4> f{};  // warp distance as a fraction of that edge's length, [0, alpha]
+  std::array<double, 6> t{};  // cut parameter from the edge's lower local vertex, [alpha, 1 - alpha]
   std::array<bool, 2> parity{true, true};
   bool pivot_on_short = true;
 };
@@ -78,8 +78,9 @@ StencilInput make_input(const Config& c, bool reference) {
   for (int e = 0; e < 6; ++e) {
     const int i = kStencilEdges[e][0], j = kStencilEdges[e][1];
     const double t = reference ? 0.5 : c.t[static_cast<std::size_t>(e)];
-    in.x[static_cast<std::size_t>(4 + e)] = kVertex[static_cast<std::size_t>(i)] +
-                                             t * (kVertex[static_cast<std::size_t>(j)] - kVertex[static_cast<std::size_t>(i)]);
+    in.x[static_cast<std::size_t>(4 + e)] =
+        kVertex[static_cast<std::size_t>(i)] +
+        t * (kVertex[static_cast<std::size_t>(j)] - kVertex[static_cast<std::size_t>(i)]);
   }
   return in;
 }
@@ -155,7 +156,9 @@ void for_each_config(const Alphas& al, int nf, int nt, bool pivot_on_short, Visi
           std::array<int, 6> cut_edges{};
           int ncut = 0;
           for (int e = 0; e < 6; ++e)
-            if (c.kind[static_cast<std::size_t>(kStencilEdges[e][0])] * c.kind[static_cast<std::size_t>(kStencilEdges[e][1])] < 0)
+            if (c.kind[static_cast<std::size_t>(kStencilEdges[e][0])] *
+                    c.kind[static_cast<std::size_t>(kStencilEdges[e][1])] <
+                0)
               cut_edges[static_cast<std::size_t>(ncut++)] = e;
           int combos = 1;
           for (int m = 0; m < ncut; ++m) combos *= nt;
@@ -257,7 +260,8 @@ TEST(StuffingStencil, TilesTheClippedTetAtMidEdge) {
 TEST(StuffingStencil, EveryConfigurationInsideTheBounds) {
   const Alphas al{kStuffingAlphaLong, kStuffingAlphaShort};
   const Extremes x = grid_extremes(al, 3, 4, true);
-  std::printf("%ld configurations: dihedral angles %.3f..%.3f degrees, %ld inverted\n", x.configs, x.min, x.max, x.inverted);
+  std::printf("%ld configurations: dihedral angles %.3f..%.3f degrees, %ld inverted\n", x.configs, x.min, x.max,
+              x.inverted);
   EXPECT_EQ(x.inverted, 0);
   EXPECT_GE(x.min, kStuffingMinDihedralDeg);
   EXPECT_LE(x.max, kStuffingMaxDihedralDeg);
@@ -273,11 +277,12 @@ void refine(const Alphas& al, Config c, bool minimise, double& value) {
     Config d = c;
     for (int i = 0; i < 4; ++i)
       if (d.kind[static_cast<std::size_t>(i)] == 0)
-        d.f[static_cast<std::size_t>(i)] = std::clamp(d.f[static_cast<std::size_t>(i)] + step * (2 * rng.uniform() - 1), 0.0,
-                                                      al.of_direction(d.dir[static_cast<std::size_t>(i)]));
+        d.f[static_cast<std::size_t>(i)] = std::clamp(d.f[static_cast<std::size_t>(i)] + step * (2 * rng.uniform() - 1),
+                                                      0.0, al.of_direction(d.dir[static_cast<std::size_t>(i)]));
     for (int e = 0; e < 6; ++e) {
       const double a = al.of_edge(kStencilEdges[e][0], kStencilEdges[e][1]);
-      d.t[static_cast<std::size_t>(e)] = std::clamp(d.t[static_cast<std::size_t>(e)] + step * (2 * rng.uniform() - 1), a, 1 - a);
+      d.t[static_cast<std::size_t>(e)] =
+          std::clamp(d.t[static_cast<std::size_t>(e)] + step * (2 * rng.uniform() - 1), a, 1 - a);
     }
     const Angles a = evaluate(d);
     if (a.inverted || a.tets == 0) continue;
@@ -291,7 +296,8 @@ void refine(const Alphas& al, Config c, bool minimise, double& value) {
 }
 
 TEST(StuffingStencil, DISABLED_SearchBounds) {
-  const double pairs[][2] = {{0.24999, 0.41189}, {0.24999, 0.38}, {0.24999, 0.44}, {0.22, 0.42}, {0.28, 0.38}, {0.3, 0.3}, {0.2, 0.2}};
+  const double pairs[][2] = {{0.24999, 0.41189}, {0.24999, 0.38}, {0.24999, 0.44}, {0.22, 0.42},
+                             {0.28, 0.38},       {0.3, 0.3},      {0.2, 0.2}};
   for (bool pivot_on_short : {true, false})
     for (const auto& p : pairs) {
       const Alphas al{p[0], p[1]};
@@ -299,8 +305,10 @@ TEST(StuffingStencil, DISABLED_SearchBounds) {
       double mn = x.min, mx = x.max;
       refine(al, x.argmin, true, mn);
       refine(al, x.argmax, false, mx);
-      std::printf("pivot_on_short %d alpha_long %.5f alpha_short %.5f: grid %.3f..%.3f (%ld configs, %ld inverted), refined %.3f..%.3f\n",
-                  pivot_on_short, p[0], p[1], x.min, x.max, x.configs, x.inverted, mn, mx);
+      std::printf(
+          "pivot_on_short %d alpha_long %.5f alpha_short %.5f: grid %.3f..%.3f (%ld configs, %ld inverted), refined "
+          "%.3f..%.3f\n",
+          pivot_on_short, p[0], p[1], x.min, x.max, x.configs, x.inverted, mn, mx);
       std::fflush(stdout);
     }
 }

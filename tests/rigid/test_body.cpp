@@ -14,7 +14,8 @@ namespace shatter {
 namespace {
 
 TEST(Body, ModelIsInTheBodyFrame) {
-  const TetMesh m = make_box_mesh({.min = Vec3(1, 2, 3), .max = Vec3(1.4, 2.2, 3.1), .cells = {4, 2, 2}, .jitter = 0.1});
+  const TetMesh m =
+      make_box_mesh({.min = Vec3(1, 2, 3), .max = Vec3(1.4, 2.2, 3.1), .cells = {4, 2, 2}, .jitter = 0.1});
   RigidState rigid;
   auto body = make_body_model(m, Material{}, ModelKind::stvk, &rigid);
   ASSERT_OK(body);

@@ -12,7 +12,8 @@ namespace {
 
 // An asymmetric brick (principal moments in ratio about 1 : 2.4 : 2.9) meshed with tets.
 RigidInertia brick() {
-  const TetMesh m = make_box_mesh({.min = Vec3(-0.15, -0.05, -0.025), .max = Vec3(0.15, 0.05, 0.025), .cells = {6, 2, 1}});
+  const TetMesh m =
+      make_box_mesh({.min = Vec3(-0.15, -0.05, -0.025), .max = Vec3(0.15, 0.05, 0.025), .cells = {6, 2, 1}});
   return rigid_inertia(mass_properties(m, 2400));
 }
 

@@ -83,17 +83,20 @@ TEST(CalculiX, CantileverUnderTipLoad) {
     "material": "steel", "model": "linear",
     "anchors": [{"plane": {"point": [0, 0, 0], "normal": [1, 0, 0]}}],
     "loads": [{"box": {"min": [1, 0, 0], "max": [1, 0.1, 0.1]}, "total_force": [0, -1000, 0]}]
-  })", dir);
+  })",
+                                             dir);
   ASSERT_GT(c.max_u, 0.0);
   EXPECT_LE(c.max_u_difference, kDisplacementTolerance * c.max_u) << c.max_u_difference << " of " << c.max_u;
-  EXPECT_LE(c.max_stress_difference, kStressTolerance * c.max_stress) << c.max_stress_difference << " of " << c.max_stress;
+  EXPECT_LE(c.max_stress_difference, kStressTolerance * c.max_stress)
+      << c.max_stress_difference << " of " << c.max_stress;
 }
 
 TEST(CalculiX, BarInTensionWithSymmetryRollers) {
   SHATTER_REQUIRE_TOOL(calculix::available(), "ccx (CalculiX) is not installed");
   test::TempDir dir;
   const double length = 0.2, side = 0.02, force = 2000.0;
-  const TetMesh mesh = make_box_mesh(BoxMeshDef{.min = Vec3::Zero(), .max = Vec3(length, side, side), .cells = {8, 2, 2}});
+  const TetMesh mesh =
+      make_box_mesh(BoxMeshDef{.min = Vec3::Zero(), .max = Vec3(length, side, side), .cells = {8, 2, 2}});
   const Comparison c = compare_with_calculix(mesh, R"({
     "material": "glass", "model": "linear",
     "anchors": [
@@ -102,7 +105,8 @@ TEST(CalculiX, BarInTensionWithSymmetryRollers) {
       {"plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}, "components": "z"}],
     "loads": [{"plane": {"point": [0.2, 0, 0], "normal": [1, 0, 0]}, "total_force": [2000, 0, 0],
                "distribution": "area"}]
-  })", dir);
+  })",
+                                             dir);
   ASSERT_GT(c.max_u, 0.0);
   EXPECT_LE(c.max_u_difference, kDisplacementTolerance * c.max_u) << c.max_u_difference << " of " << c.max_u;
   EXPECT_LE(c.max_stress_difference, kStressTolerance * c.max_stress);
@@ -113,20 +117,27 @@ TEST(CalculiX, BarInTensionWithSymmetryRollers) {
   for (const Mat3& s : c.results.stress) EXPECT_NEAR(s(0, 0), force / area, 1e-6 * force / area);
   const double expected = force * length / (glass->youngs_modulus * area);
   for (Index i = 0; i < mesh.num_nodes(); ++i)
-    if (mesh.positions[i].x() == length) { EXPECT_NEAR(c.results.displacement[i].x(), expected, 1e-9 * expected); }
+    if (mesh.positions[i].x() == length) {
+      EXPECT_NEAR(c.results.displacement[i].x(), expected, 1e-9 * expected);
+    }
 }
 
 TEST(CalculiX, JitteredBlockUnderLoadPatch) {
   SHATTER_REQUIRE_TOOL(calculix::available(), "ccx (CalculiX) is not installed");
   test::TempDir dir;
-  const TetMesh mesh = make_box_mesh(BoxMeshDef{.min = Vec3::Zero(), .max = Vec3::Ones(), .cells = {4, 4, 4},
-                                                .pattern = BoxMeshDef::Pattern::five, .jitter = 0.15, .seed = 7});
+  const TetMesh mesh = make_box_mesh(BoxMeshDef{.min = Vec3::Zero(),
+                                                .max = Vec3::Ones(),
+                                                .cells = {4, 4, 4},
+                                                .pattern = BoxMeshDef::Pattern::five,
+                                                .jitter = 0.15,
+                                                .seed = 7});
   const Comparison c = compare_with_calculix(mesh, R"({
     "material": "concrete", "model": "linear",
     "anchors": [{"plane": {"point": [0, 0, 0], "normal": [0, 1, 0]}}],
     "loads": [{"box": {"min": [0.2, 1, 0.2], "max": [0.8, 1, 0.8]}, "total_force": [2e4, -1e5, 0]},
               {"nodes": [125], "force": [0, 0, 5e3]}]
-  })", dir);
+  })",
+                                             dir);
   ASSERT_GT(c.max_u, 0.0);
   EXPECT_LE(c.max_u_difference, kDisplacementTolerance * c.max_u) << c.max_u_difference << " of " << c.max_u;
   EXPECT_LE(c.max_stress_difference, kStressTolerance * c.max_stress);

@@ -84,7 +84,8 @@ TEST(StaticCase, DefaultsAndShortForms) {
 
   auto custom = parse_static_case(
       R"({"material": {"youngs_modulus": 1e9, "poisson_ratio": 0.3, "density": 1000, "tensile_strength": "inf"},
-          "anchors": [{"set": "base"}], "gravity": [0, 0, -10]})", "c.json");
+          "anchors": [{"set": "base"}], "gravity": [0, 0, -10]})",
+      "c.json");
   ASSERT_OK(custom);
   EXPECT_EQ(custom->material.name, "custom");
   EXPECT_TRUE(std::isinf(custom->material.tensile_strength));
@@ -104,8 +105,8 @@ TEST(StaticCase, BrokenCasesNameTheField) {
       {R"({"material": "unobtainium", "anchors": [{"nodes": [1]}]})", "material", "unobtainium"},
       {R"({"material": {"preset": "glass", "youngs_modulus": -1}, "anchors": [{"nodes": [1]}]})",
        "material.youngs_modulus", ""},
-      {R"({"material": {"youngs_modulus": 1e9, "density": 1}, "anchors": [{"nodes": [1]}]})",
-       "material.poisson_ratio", "missing"},
+      {R"({"material": {"youngs_modulus": 1e9, "density": 1}, "anchors": [{"nodes": [1]}]})", "material.poisson_ratio",
+       "missing"},
       {R"({"material": {"preset": "glass", "poison_ratio": 0.2}, "anchors": [{"nodes": [1]}]})",
        "material.poison_ratio", "did you mean \"poisson_ratio\""},
       {R"({"material": "glass", "model": "neo", "anchors": [{"nodes": [1]}]})", "model", "neo"},
@@ -113,14 +114,16 @@ TEST(StaticCase, BrokenCasesNameTheField) {
       {R"({"material": "glass", "anchors": []})", "anchors", "at least one"},
       {R"({"material": "glass", "anchors": {"nodes": [1]}})", "anchors", "expected an array"},
       {R"({"material": "glass", "anchors": [{"components": "xy"}]})", "anchors[0]", "one of \"nodes\""},
-      {R"({"material": "glass", "anchors": [{"nodes": [1], "box": {"min": [0,0,0], "max": [1,1,1]}}]})",
-       "anchors[0]", "only one"},
+      {R"({"material": "glass", "anchors": [{"nodes": [1], "box": {"min": [0,0,0], "max": [1,1,1]}}]})", "anchors[0]",
+       "only one"},
       {R"({"material": "glass", "anchors": [{"nodes": [1], "components": "xw"}]})", "anchors[0].components", "x, y, z"},
       {R"({"material": "glass", "anchors": [{"nodes": [1], "components": "xx"}]})", "anchors[0].components", ""},
       {R"({"material": "glass", "anchors": [{"nodes": [1, "two"]}]})", "anchors[0].nodes[1]", "integer"},
       {R"({"material": "glass", "anchors": [{"nodes": []}]})", "anchors[0].nodes", "non-empty"},
-      {R"({"material": "glass", "anchors": [{"box": {"min": [0,0], "max": [1,1,1]}}]})", "anchors[0].box.min", "3 numbers"},
-      {R"({"material": "glass", "anchors": [{"box": {"min": [2,0,0], "max": [1,1,1]}}]})", "anchors[0].box", "min must not exceed max"},
+      {R"({"material": "glass", "anchors": [{"box": {"min": [0,0], "max": [1,1,1]}}]})", "anchors[0].box.min",
+       "3 numbers"},
+      {R"({"material": "glass", "anchors": [{"box": {"min": [2,0,0], "max": [1,1,1]}}]})", "anchors[0].box",
+       "min must not exceed max"},
       {R"({"material": "glass", "anchors": [{"box": {"min": [0,0,0]}}]})", "anchors[0].box.max", "missing"},
       {R"({"material": "glass", "anchors": [{"plane": {"point": [0,0,0], "normal": [0,0,0]}}]})",
        "anchors[0].plane.normal", "non-zero"},
@@ -190,7 +193,9 @@ TEST(StaticCase, ResolvesAnchorsAndLoads) {
   EXPECT_NEAR((r->total_load - Vec3(1000, -20, 90)).norm(), 0, 1e-9);
   // Equal spread: each of the 9 end nodes has 1000/9 in x.
   for (Index i = 0; i < mesh.num_nodes(); ++i)
-    if (mesh.positions[i].x() == 2) { EXPECT_NEAR(r->forces[i].x(), 1000.0 / 9.0, 1e-9); }
+    if (mesh.positions[i].x() == 2) {
+      EXPECT_NEAR(r->forces[i].x(), 1000.0 / 9.0, 1e-9);
+    }
   // Area spread over a 1x1 face of 2x2 cells, each cut into 2 triangles: corner nodes get less than
   // edge nodes, the centre the most; the sum is the total.
   double z_sum = 0, z_max = 0, z_min = 1e9;
@@ -216,12 +221,14 @@ TEST(StaticCase, ResolveErrorsNameTheField) {
   };
   const Bad cases[] = {
       {R"({"material": "glass", "anchors": [{"nodes": [1, 999]}]})", "anchors[0]", "node id 999"},
-      {R"({"material": "glass", "anchors": [{"box": {"min": [5,5,5], "max": [6,6,6]}}]})", "anchors[0]", "contains no node"},
+      {R"({"material": "glass", "anchors": [{"box": {"min": [5,5,5], "max": [6,6,6]}}]})", "anchors[0]",
+       "contains no node"},
       {R"({"material": "glass", "anchors": [{"plane": {"point": [0,0,0.25], "normal": [0,0,1]}}]})", "anchors[0]",
        "no node"},
       {R"({"material": "glass", "anchors": [{"set": "base"}]})", "anchors[0]", "no node set"},
       {R"({"material": "glass", "anchors": [{"plane": {"point": [0,0,0], "normal": [1,0,0]}}],
-          "loads": [{"nodes": [0], "force": [1, 0, 0]}]})", "loads[0]", "node id 0"},
+          "loads": [{"nodes": [0], "force": [1, 0, 0]}]})",
+       "loads[0]", "node id 0"},
       // A single held node leaves rotations free; a plane held only in x leaves sliding free.
       {R"({"material": "glass", "anchors": [{"nodes": [1]}]})", "anchors", "rigid"},
       {R"({"material": "glass", "anchors": [{"plane": {"point": [0,0,0], "normal": [1,0,0]}, "components": "x"}]})",
@@ -230,7 +237,8 @@ TEST(StaticCase, ResolveErrorsNameTheField) {
       {R"({"material": "glass", "anchors": [{"box": {"min": [0,0,0], "max": [0,0,1]}}]})", "anchors", "rigid"},
       // Area spread over nodes that span no boundary triangle (a single node).
       {R"({"material": "glass", "anchors": [{"plane": {"point": [0,0,0], "normal": [1,0,0]}}],
-          "loads": [{"nodes": [5], "total_force": [1, 0, 0], "distribution": "area"}]})", "loads[0]", "boundary triangle"},
+          "loads": [{"nodes": [5], "total_force": [1, 0, 0], "distribution": "area"}]})",
+       "loads[0]", "boundary triangle"},
   };
   for (const Bad& b : cases) {
     auto c = parse_static_case(b.json, "r.json");
@@ -246,7 +254,8 @@ TEST(StaticCase, ResolveErrorsNameTheField) {
   auto ok = parse_static_case(R"({"material": "glass", "anchors": [
       {"plane": {"point": [0,0,0], "normal": [1,0,0]}, "components": "x"},
       {"plane": {"point": [0,0,0], "normal": [0,1,0]}, "components": "y"},
-      {"plane": {"point": [0,0,0], "normal": [0,0,1]}, "components": "z"}]})", "ok.json");
+      {"plane": {"point": [0,0,0], "normal": [0,0,1]}, "components": "z"}]})",
+                              "ok.json");
   ASSERT_OK(ok);
   EXPECT_OK(resolve_static_case(*ok, mesh));
 }
@@ -306,10 +315,15 @@ TEST(StaticCli, WritesResultsAndSummary) {
   for (Index i = 0; i < f.mesh.num_nodes(); ++i) {
     FileId id = 0;
     double u[3] = {};
-    ASSERT_EQ(std::sscanf(disp[static_cast<std::size_t>(i) + 1].c_str(), "%ld,%lf,%lf,%lf", &id, &u[0], &u[1], &u[2]), 4);
+    ASSERT_EQ(std::sscanf(disp[static_cast<std::size_t>(i) + 1].c_str(), "%ld,%lf,%lf,%lf", &id, &u[0], &u[1], &u[2]),
+              4);
     EXPECT_EQ(id, f.mesh.node_id(i));
-    if (f.mesh.positions[i].x() == 0) { EXPECT_EQ(u[0] * u[0] + u[1] * u[1] + u[2] * u[2], 0.0); }
-    if (f.mesh.positions[i].x() == 2) { EXPECT_LT(u[1], 0.0); }
+    if (f.mesh.positions[i].x() == 0) {
+      EXPECT_EQ(u[0] * u[0] + u[1] * u[1] + u[2] * u[2], 0.0);
+    }
+    if (f.mesh.positions[i].x() == 2) {
+      EXPECT_LT(u[1], 0.0);
+    }
   }
   const auto elems = lines_of(read_text(std::filesystem::path(out) / "elements.csv"));
   ASSERT_EQ(elems.size(), static_cast<std::size_t>(f.mesh.num_tets()) + 1);
@@ -343,7 +357,8 @@ TEST(StaticCli, BadInputExits3AndWritesNothing) {
   CliFixture f;
   const std::string out = f.dir.file("out");
   const std::string bad_case = f.write_case("bad.json", R"({"material": "glass", "anchors": [{"nodes": [1, 999]}]})");
-  auto r = test::run_command(test::cli_path() + " static " + f.mesh_path + " --case " + bad_case + " --out " + out, true);
+  auto r =
+      test::run_command(test::cli_path() + " static " + f.mesh_path + " --case " + bad_case + " --out " + out, true);
   EXPECT_EQ(r.status, 3) << r.output;
   EXPECT_NE(r.output.find("anchors[0]"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("999"), std::string::npos) << r.output;
@@ -356,7 +371,8 @@ TEST(StaticCli, BadInputExits3AndWritesNothing) {
   EXPECT_FALSE(std::filesystem::exists(out));
 
   const std::string good = f.write_case("good.json", kCliCase);
-  r = test::run_command(test::cli_path() + " static " + f.dir.file("missing.msh") + " --case " + good + " --out " + out, true);
+  r = test::run_command(test::cli_path() + " static " + f.dir.file("missing.msh") + " --case " + good + " --out " + out,
+                        true);
   EXPECT_EQ(r.status, 3) << r.output;
   EXPECT_FALSE(std::filesystem::exists(out));
 }
@@ -366,7 +382,8 @@ TEST(StaticCli, OutputFailureExits4) {
   const std::string good = f.write_case("good.json", kCliCase);
   // The output folder's place is taken by a file.
   const std::string blocker = f.write_case("blocker", "x");
-  auto r = test::run_command(test::cli_path() + " static " + f.mesh_path + " --case " + good + " --out " + blocker, true);
+  auto r =
+      test::run_command(test::cli_path() + " static " + f.mesh_path + " --case " + good + " --out " + blocker, true);
   EXPECT_EQ(r.status, 4) << r.output;
 }
 

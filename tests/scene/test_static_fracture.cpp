@@ -187,9 +187,13 @@ TEST(StaticFractureCli, GlassBarBreaksInTwo) {
   for (FileId id : input_nodes) EXPECT_TRUE(seen_nodes.count(id)) << "node " << id;
   for (FileId id : input_tets) EXPECT_TRUE(seen_tets.count(id)) << "tet " << id;
   for (FileId id : seen_nodes)
-    if (!input_nodes.count(id)) { EXPECT_GT(id, *input_nodes.rbegin()); }
+    if (!input_nodes.count(id)) {
+      EXPECT_GT(id, *input_nodes.rbegin());
+    }
   for (FileId id : seen_tets)
-    if (!input_tets.count(id)) { EXPECT_GT(id, *input_tets.rbegin()); }
+    if (!input_tets.count(id)) {
+      EXPECT_GT(id, *input_tets.rbegin());
+    }
 
   // The whole cut mesh and the crack table.
   auto whole_cut = read_mesh((fs::path(out) / "fragments.vtu").string());

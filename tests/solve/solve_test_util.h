@@ -4,15 +4,19 @@
 #include <cmath>
 #include <vector>
 
+#include "shatter/fem/assembly.h"
 #include "shatter/fem/fem_model.h"
 #include "shatter/mesh/generate.h"
-#include "shatter/fem/assembly.h"
 
 namespace shatter::test {
 
 inline Material test_material(double youngs = 70e9, double poisson = 0.3) {
-  return Material{.name = "test", .youngs_modulus = youngs, .poisson_ratio = poisson, .density = 2500,
-                  .tensile_strength = kInfinity, .yield_stress = kInfinity};
+  return Material{.name = "test",
+                  .youngs_modulus = youngs,
+                  .poisson_ratio = poisson,
+                  .density = 2500,
+                  .tensile_strength = kInfinity,
+                  .yield_stress = kInfinity};
 }
 
 inline TetMesh box(const Vec3& max, std::array<Index, 3> cells, double jitter = 0.0) {

@@ -8,8 +8,8 @@
 
 #include "shatter/core/parallel.h"
 #include "shatter/core/random.h"
-#include "shatter/fem/fem_model.h"
 #include "shatter/fem/assembly.h"
+#include "shatter/fem/fem_model.h"
 #include "shatter/solve/linear_solvers.h"
 #include "solve_test_util.h"
 #include "support/test_support.h"
@@ -21,16 +21,18 @@ namespace {
 std::vector<AnchorMask> mixed_anchors(const TetMesh& mesh) {
   std::vector<AnchorMask> a(mesh.positions.size(), anchor_none);
   for (std::size_t v = 0; v < a.size(); ++v) {
-    if (mesh.positions[v].x() == 0.0) a[v] = anchor_all;
-    else if (v % 7 == 3) a[v] = 2;       // y held
-    else if (v % 11 == 5) a[v] = 1 | 4;  // x and z held
+    if (mesh.positions[v].x() == 0.0)
+      a[v] = anchor_all;
+    else if (v % 7 == 3)
+      a[v] = 2;  // y held
+    else if (v % 11 == 5)
+      a[v] = 1 | 4;  // x and z held
   }
   return a;
 }
 
 // Dense 3N x 3N stiffness from triplets over all tets (no anchors).
-Eigen::MatrixXd dense_full(Index num_nodes, const std::vector<TetIndices>& tets,
-                           const std::vector<Mat12>& ke) {
+Eigen::MatrixXd dense_full(Index num_nodes, const std::vector<TetIndices>& tets, const std::vector<Mat12>& ke) {
   std::vector<Eigen::Triplet<double>> trip;
   for (std::size_t e = 0; e < tets.size(); ++e)
     for (int i = 0; i < 4; ++i)
@@ -88,8 +90,10 @@ TEST(Assembly, PatternRefillEqualsTripletAssembly) {
   for (Index i = 0; i < m.size(); ++i)
     for (Index j = 0; j < m.size(); ++j) {
       double expect;
-      if (g[i] < 0 || g[j] < 0) expect = (i == j) ? 1.0 : 0.0;
-      else expect = full(g[i], g[j]);
+      if (g[i] < 0 || g[j] < 0)
+        expect = (i == j) ? 1.0 : 0.0;
+      else
+        expect = full(g[i], g[j]);
       max_err = std::max(max_err, std::abs(reduced(i, j) - expect));
     }
   EXPECT_LE(max_err, 1e-14 * scale);
@@ -185,8 +189,8 @@ TEST(LinearSolvers, AgreeWithDenseEliminationOnRandomSpdSystems) {
   for (Index i = 0; i < m.size(); ++i)
     if (g[i] >= 0) b[i] = bf[pos_of_global[g[i]]];
 
-  for (LinearSolverKind kind : {LinearSolverKind::direct_ldlt, LinearSolverKind::pcg_block_jacobi,
-                                LinearSolverKind::pcg_block_gauss_seidel}) {
+  for (LinearSolverKind kind :
+       {LinearSolverKind::direct_ldlt, LinearSolverKind::pcg_block_jacobi, LinearSolverKind::pcg_block_gauss_seidel}) {
     LinearSolver solver(LinearSolverOptions{.kind = kind, .relative_tolerance = 1e-12, .max_iterations = 5000});
     Eigen::VectorXd x;
     const LinearSolveReport rep = solver.solve(m, b, x);
@@ -260,8 +264,8 @@ TEST(LinearSolvers, DirectReusesSymbolicAnalysisAndWarmStartHelps) {
 TEST(LinearSolvers, BadInputGivesReportNotNaN) {
   const TetMesh mesh = test::box(Vec3(1.0, 1.0, 1.0), {2, 2, 2});
   BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, {});  // nothing held: the zero matrix is singular
-  for (LinearSolverKind kind : {LinearSolverKind::direct_ldlt, LinearSolverKind::pcg_block_jacobi,
-                                LinearSolverKind::pcg_block_gauss_seidel}) {
+  for (LinearSolverKind kind :
+       {LinearSolverKind::direct_ldlt, LinearSolverKind::pcg_block_jacobi, LinearSolverKind::pcg_block_gauss_seidel}) {
     LinearSolver solver(LinearSolverOptions{.kind = kind});
     Eigen::VectorXd b = Eigen::VectorXd::Ones(m.size()), x;
     LinearSolveReport rep = solver.solve(m, b, x);

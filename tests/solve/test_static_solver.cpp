@@ -41,8 +41,8 @@ Bar make_bar(double total_force, std::array<Index, 3> cells, double jitter = 0.0
     if (p.y() == bar.side && p.z() == 0.0) bar.problem.anchors[v] = 1 | 4;
   }
   const double area = bar.side * bar.side;
-  bar.problem.external_forces = test::face_load(
-      bar.mesh, [&](const Vec3& p) { return p.x() == bar.length; }, Vec3(total_force / area, 0, 0));
+  bar.problem.external_forces =
+      test::face_load(bar.mesh, [&](const Vec3& p) { return p.x() == bar.length; }, Vec3(total_force / area, 0, 0));
   return bar;
 }
 
@@ -78,9 +78,10 @@ TEST(StaticSolver, CantileverConvergesTowardBeamTheory) {
   const double I = h * h * h * h / 12.0;
   const double euler_bernoulli = P * L * L * L / (3 * kE * I);
   const double shear = P * L / ((5.0 / 6.0) * (kE / (2 * (1 + kNu))) * h * h);
-  std::printf("cantilever L=%.1f m, h=%.2f m, E=%.0f GPa, nu=%.2f, P=%.0f N: Euler-Bernoulli %.4e m, "
-              "Timoshenko %.4e m (ratio %.4f)\n", L, h, kE / 1e9, kNu, P, euler_bernoulli,
-              euler_bernoulli + shear, (euler_bernoulli + shear) / euler_bernoulli);
+  std::printf(
+      "cantilever L=%.1f m, h=%.2f m, E=%.0f GPa, nu=%.2f, P=%.0f N: Euler-Bernoulli %.4e m, "
+      "Timoshenko %.4e m (ratio %.4f)\n",
+      L, h, kE / 1e9, kNu, P, euler_bernoulli, euler_bernoulli + shear, (euler_bernoulli + shear) / euler_bernoulli);
   std::printf("%-12s %8s %14s %10s\n", "cells", "tets", "tip defl. m", "ratio EB");
   double previous = 0;
   double last_ratio = 0;
@@ -117,8 +118,8 @@ TEST(StaticSolver, CantileverConvergesTowardBeamTheory) {
 }
 
 TEST(StaticSolver, NewtonConvergesInFewIterationsOnStiffProblem) {
-  for (LinearSolverKind kind : {LinearSolverKind::direct_ldlt, LinearSolverKind::pcg_block_jacobi,
-                                LinearSolverKind::pcg_block_gauss_seidel}) {
+  for (LinearSolverKind kind :
+       {LinearSolverKind::direct_ldlt, LinearSolverKind::pcg_block_jacobi, LinearSolverKind::pcg_block_gauss_seidel}) {
     Bar bar = make_bar(2e5, {8, 2, 2});
     // Bend it too: a transverse load on the end.
     for (std::size_t v = 0; v < bar.mesh.positions.size(); ++v)
@@ -182,12 +183,11 @@ TEST(StaticSolver, BitIdenticalOnOneAndTwoThreads) {
   problem.anchors.assign(mesh.positions.size(), anchor_none);
   for (std::size_t v = 0; v < mesh.positions.size(); ++v)
     if (mesh.positions[v].x() == 0.0) problem.anchors[v] = anchor_all;
-  problem.external_forces =
-      test::face_load(mesh, [&](const Vec3& p) { return p.x() == 2.0; }, Vec3(1e6, -1e5, 0));
+  problem.external_forces = test::face_load(mesh, [&](const Vec3& p) { return p.x() == 2.0; }, Vec3(1e6, -1e5, 0));
   problem.gravity = true;
   const int saved = num_threads();
-  for (LinearSolverKind kind : {LinearSolverKind::pcg_block_jacobi, LinearSolverKind::pcg_block_gauss_seidel,
-                                LinearSolverKind::direct_ldlt}) {
+  for (LinearSolverKind kind :
+       {LinearSolverKind::pcg_block_jacobi, LinearSolverKind::pcg_block_gauss_seidel, LinearSolverKind::direct_ldlt}) {
     std::vector<Vec3> results[2];
     for (int threads : {1, 2}) {
       set_num_threads(threads);
@@ -244,8 +244,8 @@ TEST(StaticSolver, WarmStartCutsIterationsOfRepeatedImpacts) {
       for (Vec3& f : p.external_forces) f *= 1.5;  // the next impact is harder
     }
   }
-  std::printf("PCG iterations per impact, cold: %d %d %d, warm: %d %d %d\n", iterations[0][0],
-              iterations[0][1], iterations[0][2], iterations[1][0], iterations[1][1], iterations[1][2]);
+  std::printf("PCG iterations per impact, cold: %d %d %d, warm: %d %d %d\n", iterations[0][0], iterations[0][1],
+              iterations[0][2], iterations[1][0], iterations[1][1], iterations[1][2]);
   EXPECT_EQ(iterations[1][0], iterations[0][0]);  // nothing to start from yet
   EXPECT_LT(iterations[1][1], iterations[0][1]);
   EXPECT_LT(iterations[1][2], iterations[0][2]);
@@ -350,7 +350,6 @@ TEST(StaticSolver, NaNNeverEscapes) {
   EXPECT_FALSE(solve_static(model, bar.problem, x).ok());
 }
 
-
 // Every way a solve ends has its own status, converged == (status == converged), and a message
 // exactly when it did not converge.
 TEST(StaticSolver, StatusNamesTheOutcome) {
@@ -416,9 +415,9 @@ TEST(StaticSolver, StatusNamesTheOutcome) {
   expect_status(model, p, options, SolveStatus::line_search_failed);
 
   std::vector<std::string> names;
-  for (SolveStatus status : {SolveStatus::converged, SolveStatus::invalid_input, SolveStatus::not_finite,
-                             SolveStatus::no_convergence, SolveStatus::line_search_failed,
-                             SolveStatus::linear_solve_failed}) {
+  for (SolveStatus status :
+       {SolveStatus::converged, SolveStatus::invalid_input, SolveStatus::not_finite, SolveStatus::no_convergence,
+        SolveStatus::line_search_failed, SolveStatus::linear_solve_failed}) {
     const std::string name = to_string(status);
     EXPECT_NE(name, "?");
     EXPECT_EQ(std::count(names.begin(), names.end(), name), 0) << name;

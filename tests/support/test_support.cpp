@@ -1,11 +1,11 @@
 #include "support/test_support.h"
 
-#include <array>
-#include <map>
-#include <cstdio>
-#include <mutex>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <array>
+#include <cstdio>
+#include <map>
+#include <mutex>
 
 #include "shatter/core/log.h"
 
@@ -91,7 +91,8 @@ int closed_manifold_euler(const TriSurface& s) {
     } while (cur != start && steps <= ring.size());
     EXPECT_EQ(steps, ring.size()) << "pinched vertex " << v;
   }
-  return static_cast<int>(s.positions.size()) - static_cast<int>(edges.size() / 2) + static_cast<int>(s.triangles.size());
+  return static_cast<int>(s.positions.size()) - static_cast<int>(edges.size() / 2) +
+         static_cast<int>(s.triangles.size());
 }
 
 }  // namespace shatter::test

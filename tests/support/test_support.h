@@ -78,22 +78,22 @@ void expect_read_error(const Result<T>& r, const std::string& substring, std::in
 /// missing on a developer machine, but fail under CI (environment variable CI set), where
 /// scripts/setup.sh installs it, so a missing install step cannot hide behind a skip.
 #define SHATTER_REQUIRE_TOOL(available, what)                                     \
-  do {                                                                           \
-    if (!(available)) {                                                          \
+  do {                                                                            \
+    if (!(available)) {                                                           \
       if (std::getenv("CI") != nullptr) FAIL() << what << " (required under CI)"; \
-      GTEST_SKIP() << what;                                                      \
-    }                                                                            \
+      GTEST_SKIP() << what;                                                       \
+    }                                                                             \
   } while (0)
 
 /// Fail the test with the error's text if r is not ok.
-#define ASSERT_OK(expr)                                                        \
-  do {                                                                         \
-    const auto& shatter_r_ = (expr);                                           \
-    ASSERT_TRUE(shatter_r_.ok()) << shatter_r_.error().to_string();            \
+#define ASSERT_OK(expr)                                             \
+  do {                                                              \
+    const auto& shatter_r_ = (expr);                                \
+    ASSERT_TRUE(shatter_r_.ok()) << shatter_r_.error().to_string(); \
   } while (0)
-#define EXPECT_OK(expr)                                                        \
-  do {                                                                         \
-    const auto& shatter_r_ = (expr);                                           \
+#define EXPECT_OK(expr)                                                                                 \
+  do {                                                                                                  \
+    const auto& shatter_r_ = (expr);                                                                    \
     EXPECT_TRUE(shatter_r_.ok()) << (shatter_r_.ok() ? std::string() : shatter_r_.error().to_string()); \
   } while (0)
 

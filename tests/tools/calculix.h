@@ -20,11 +20,11 @@ namespace shatter::calculix {
 
 struct Deck {
   const TetMesh* mesh = nullptr;
-  double youngs_modulus = 0;            ///< Pa
+  double youngs_modulus = 0;  ///< Pa
   double poisson_ratio = 0;
-  std::vector<std::uint8_t> held;       ///< held components per node, bit c = component c (#nodes)
+  std::vector<std::uint8_t> held;             ///< held components per node, bit c = component c (#nodes)
   std::vector<Vec3> prescribed_displacement;  ///< of held components, m (#nodes; empty = zero)
-  std::vector<Vec3> forces;             ///< nodal forces, N (#nodes)
+  std::vector<Vec3> forces;                   ///< nodal forces, N (#nodes)
 };
 
 /// True when a `ccx` program is on the PATH.
@@ -84,14 +84,23 @@ inline Solution parse_dat(const std::string& text, Index num_nodes, Index num_te
   enum { none, disp, stress } block = none;
   Index nodes_read = 0, tets_read = 0;
   for (std::string line; std::getline(in, line);) {
-    if (line.find("displacements (vx,vy,vz)") != std::string::npos) { block = disp; continue; }
-    if (line.find("stresses (elem, integ.pnt.") != std::string::npos) { block = stress; continue; }
+    if (line.find("displacements (vx,vy,vz)") != std::string::npos) {
+      block = disp;
+      continue;
+    }
+    if (line.find("stresses (elem, integ.pnt.") != std::string::npos) {
+      block = stress;
+      continue;
+    }
     std::istringstream ls(line);
     if (block == disp) {
       long id = 0;
       double u[3];
       if (ls >> id >> u[0] >> u[1] >> u[2]) {
-        if (id < 1 || id > num_nodes) { s.error = "node " + std::to_string(id) + " out of range"; return s; }
+        if (id < 1 || id > num_nodes) {
+          s.error = "node " + std::to_string(id) + " out of range";
+          return s;
+        }
         s.displacement[static_cast<std::size_t>(id - 1)] = Vec3(u[0], u[1], u[2]);
         ++nodes_read;
       }
@@ -99,7 +108,10 @@ inline Solution parse_dat(const std::string& text, Index num_nodes, Index num_te
       long id = 0, ip = 0;
       double v[6];
       if (ls >> id >> ip >> v[0] >> v[1] >> v[2] >> v[3] >> v[4] >> v[5]) {
-        if (id < 1 || id > num_tets) { s.error = "element " + std::to_string(id) + " out of range"; return s; }
+        if (id < 1 || id > num_tets) {
+          s.error = "element " + std::to_string(id) + " out of range";
+          return s;
+        }
         Mat3& m = s.stress[static_cast<std::size_t>(id - 1)];
         m << v[0], v[3], v[4], v[3], v[1], v[5], v[4], v[5], v[2];  // sxy, sxz, syz
         ++tets_read;

@@ -11,8 +11,7 @@ void set_assert_handler(AssertHandler handler);
 
 }  // namespace shatter
 
-#define SHATTER_CHECK(cond) \
-  ((cond) ? static_cast<void>(0) : ::shatter::assert_failed(#cond, __FILE__, __LINE__))
+#define SHATTER_CHECK(cond) ((cond) ? static_cast<void>(0) : ::shatter::assert_failed(#cond, __FILE__, __LINE__))
 #ifdef NDEBUG
 #define SHATTER_ASSERT(cond) static_cast<void>(0)
 #else

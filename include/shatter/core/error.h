@@ -16,11 +16,11 @@ namespace shatter {
 
 /// A user-facing error: where it happened and what was expected.
 struct Error {
-  std::string message;    ///< what is wrong / what was expected
-  std::string file;       ///< file the error is in ("" if none)
+  std::string message;       ///< what is wrong / what was expected
+  std::string file;          ///< file the error is in ("" if none)
   std::int64_t line = -1;    ///< 1-based line number (text formats), -1 if not known
   std::int64_t offset = -1;  ///< 0-based byte offset (binary formats), -1 if not known
-  std::string field;      ///< JSON path or parameter name ("loads[2].force"), "" if none
+  std::string field;         ///< JSON path or parameter name ("loads[2].force"), "" if none
 
   /// "file:line: field: message" with the parts that are known.
   [[nodiscard]] std::string to_string() const;
@@ -37,22 +37,37 @@ Error field_error(std::string field, std::string message);
 template <class T>
 class [[nodiscard]] Result {
  public:
-  Result(T value) : v_(std::in_place_index<0>, std::move(value)) {}  // NOLINT(implicit)
+  Result(T value) : v_(std::in_place_index<0>, std::move(value)) {}      // NOLINT(implicit)
   Result(Error error) : v_(std::in_place_index<1>, std::move(error)) {}  // NOLINT(implicit)
 
   [[nodiscard]] bool ok() const { return v_.index() == 0; }
   explicit operator bool() const { return ok(); }
 
-  T& value() & { SHATTER_ASSERT(ok()); return std::get<0>(v_); }
-  const T& value() const& { SHATTER_ASSERT(ok()); return std::get<0>(v_); }
-  T&& value() && { SHATTER_ASSERT(ok()); return std::get<0>(std::move(v_)); }
+  T& value() & {
+    SHATTER_ASSERT(ok());
+    return std::get<0>(v_);
+  }
+  const T& value() const& {
+    SHATTER_ASSERT(ok());
+    return std::get<0>(v_);
+  }
+  T&& value() && {
+    SHATTER_ASSERT(ok());
+    return std::get<0>(std::move(v_));
+  }
   T* operator->() { return &value(); }
   const T* operator->() const { return &value(); }
   T& operator*() & { return value(); }
   const T& operator*() const& { return value(); }
 
-  [[nodiscard]] const Error& error() const { SHATTER_ASSERT(!ok()); return std::get<1>(v_); }
-  Error& error() { SHATTER_ASSERT(!ok()); return std::get<1>(v_); }
+  [[nodiscard]] const Error& error() const {
+    SHATTER_ASSERT(!ok());
+    return std::get<1>(v_);
+  }
+  Error& error() {
+    SHATTER_ASSERT(!ok());
+    return std::get<1>(v_);
+  }
 
  private:
   std::variant<T, Error> v_;
@@ -66,16 +81,22 @@ class [[nodiscard]] Result<void> {
   Result(Error error) : error_(std::move(error)) {}  // NOLINT(implicit)
   [[nodiscard]] bool ok() const { return !error_.has_value(); }
   explicit operator bool() const { return ok(); }
-  [[nodiscard]] const Error& error() const { SHATTER_ASSERT(!ok()); return *error_; }
-  Error& error() { SHATTER_ASSERT(!ok()); return *error_; }
+  [[nodiscard]] const Error& error() const {
+    SHATTER_ASSERT(!ok());
+    return *error_;
+  }
+  Error& error() {
+    SHATTER_ASSERT(!ok());
+    return *error_;
+  }
 
  private:
   std::optional<Error> error_;
 };
 
 /// Propagate an error: `SHATTER_TRY(r, expr);` declares r, returns its error if it failed.
-#define SHATTER_TRY(var, expr)                          \
-  auto var = (expr);                                    \
+#define SHATTER_TRY(var, expr) \
+  auto var = (expr);           \
   if (!var.ok()) return std::move(var.error())
 
 }  // namespace shatter

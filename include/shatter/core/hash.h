@@ -28,10 +28,14 @@ class Hasher {
   /// The bytes of one plain value (an int, a double, an array of them).
   template <class T>
     requires(std::is_trivially_copyable_v<T> && !is_span<T>::value)
-  void add(const T& value) { add_bytes(&value, sizeof(T)); }
+  void add(const T& value) {
+    add_bytes(&value, sizeof(T));
+  }
   /// The bytes of the elements a span views (not the span object itself).
   template <class T, std::size_t N>
-  void add(std::span<T, N> values) { add_bytes(values.data(), values.size_bytes()); }
+  void add(std::span<T, N> values) {
+    add_bytes(values.data(), values.size_bytes());
+  }
   void add(std::string_view s) { add_bytes(s.data(), s.size()); }
 
   [[nodiscard]] std::uint64_t digest() const;

@@ -2,8 +2,8 @@
 // indices, and reductions go through fixed-size chunks summed in chunk order.
 #pragma once
 
-#include <cstdint>
 #include <algorithm>
+#include <cstdint>
 #include <vector>
 
 #ifdef SHATTER_HAS_OPENMP
@@ -46,13 +46,16 @@ T parallel_sum(std::int64_t begin, std::int64_t end, T zero, Body&& body, std::i
   if (n <= 0) return zero;
   const std::int64_t chunks = (n + chunk - 1) / chunk;
   std::vector<T> partial(static_cast<std::size_t>(chunks), zero);
-  parallel_for(0, chunks, [&](std::int64_t c) {
-    T s = zero;
-    const std::int64_t lo = begin + c * chunk;
-    const std::int64_t hi = std::min(end, lo + chunk);
-    for (std::int64_t i = lo; i < hi; ++i) s += body(i);
-    partial[static_cast<std::size_t>(c)] = s;
-  }, std::max<std::int64_t>(2, (min_parallel + chunk - 1) / chunk));
+  parallel_for(
+      0, chunks,
+      [&](std::int64_t c) {
+        T s = zero;
+        const std::int64_t lo = begin + c * chunk;
+        const std::int64_t hi = std::min(end, lo + chunk);
+        for (std::int64_t i = lo; i < hi; ++i) s += body(i);
+        partial[static_cast<std::size_t>(c)] = s;
+      },
+      std::max<std::int64_t>(2, (min_parallel + chunk - 1) / chunk));
   T total = zero;
   for (const T& p : partial) total += p;
   return total;

@@ -37,8 +37,7 @@ class BlockSparseMatrix {
   BlockSparseMatrix() = default;
   /// Pattern of the stiffness of `tets` over `num_nodes` nodes; `anchors`: held components per node
   /// (#nodes, or empty = nothing held). Values start at zero.
-  BlockSparseMatrix(Index num_nodes, const std::vector<TetIndices>& tets,
-                    const std::vector<AnchorMask>& anchors);
+  BlockSparseMatrix(Index num_nodes, const std::vector<TetIndices>& tets, const std::vector<AnchorMask>& anchors);
 
   [[nodiscard]] Index num_nodes() const { return static_cast<Index>(active_of_node_.size()); }
   [[nodiscard]] Index num_active() const { return static_cast<Index>(node_of_active_.size()); }
@@ -112,8 +111,8 @@ class BlockSparseMatrix {
   std::vector<Index> block_ptr_;
   std::vector<Index> block_col_;
   std::vector<Index> diagonal_block_;
-  std::vector<Index> held_diagonal_;  ///< positions in values() of held components' diagonals
-  std::vector<Mat12> element_buffer_; ///< element matrices of the last refill (#active tets)
+  std::vector<Index> held_diagonal_;   ///< positions in values() of held components' diagonals
+  std::vector<Mat12> element_buffer_;  ///< element matrices of the last refill (#active tets)
   Eigen::SparseMatrix<double> matrix_;
 };
 
@@ -132,17 +131,20 @@ Mat12 element_stiffness(const FemModel& model, Index e, const Mat34& xe, bool ma
 
 /// Refill `matrix` (whose pattern was built for model.tets) with the stiffness dF/dx at the
 /// deformed positions x (m, #nodes). Element matrices are symmetrised.
-void assemble_stiffness(const FemModel& model, const std::vector<Vec3>& x,
-                        const AssemblyOptions& options, BlockSparseMatrix& matrix);
+void assemble_stiffness(const FemModel& model, const std::vector<Vec3>& x, const AssemblyOptions& options,
+                        BlockSparseMatrix& matrix);
 
 // ---------------------------------------------------------------------------------------------
 
 template <class ElementMatrix>
 void BlockSparseMatrix::refill(ElementMatrix&& element_matrix) {
   element_buffer_.resize(active_tets_.size());
-  parallel_for(0, static_cast<std::int64_t>(active_tets_.size()), [&](std::int64_t s) {
-    element_buffer_[static_cast<std::size_t>(s)] = element_matrix(active_tets_[static_cast<std::size_t>(s)]);
-  }, 1024);  // ~0.5-1 us per element matrix: parallel from about half a millisecond of work
+  parallel_for(
+      0, static_cast<std::int64_t>(active_tets_.size()),
+      [&](std::int64_t s) {
+        element_buffer_[static_cast<std::size_t>(s)] = element_matrix(active_tets_[static_cast<std::size_t>(s)]);
+      },
+      1024);  // ~0.5-1 us per element matrix: parallel from about half a millisecond of work
   std::fill(values(), values() + num_values(), 0.0);
   for (std::size_t s = 0; s < active_tets_.size(); ++s) add_element(static_cast<Index>(s), element_buffer_[s]);
   finish_fill();

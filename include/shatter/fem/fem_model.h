@@ -23,24 +23,24 @@ struct FastTetData {
   std::vector<double> packed;
   /// Fixed blocks of tets (independent of the thread count). Each block accumulates its tets'
   /// forces into its own compact node buffer in tet order; nodes then gather their entries.
-  std::int64_t block_size = 0;                  ///< tets per block
-  std::vector<std::int32_t> corner_slot;        ///< 3 x block-local node slot of each corner, i.e. the
-                                                ///< offset of its x component (#tets x 4)
-  std::vector<std::int64_t> block_slot_begin;   ///< first slot of each block in the global slot
-                                                ///< array (#blocks + 1)
-  std::vector<std::int64_t> node_entry_begin;   ///< CSR into node_entry_slot (#nodes + 1)
-  std::vector<std::int64_t> node_entry_slot;    ///< global slot indices per node, in block order
+  std::int64_t block_size = 0;                 ///< tets per block
+  std::vector<std::int32_t> corner_slot;       ///< 3 x block-local node slot of each corner, i.e. the
+                                               ///< offset of its x component (#tets x 4)
+  std::vector<std::int64_t> block_slot_begin;  ///< first slot of each block in the global slot
+                                               ///< array (#blocks + 1)
+  std::vector<std::int64_t> node_entry_begin;  ///< CSR into node_entry_slot (#nodes + 1)
+  std::vector<std::int64_t> node_entry_slot;   ///< global slot indices per node, in block order
 };
 
 struct FemModel {
   ModelKind model = ModelKind::stvk;
   Material material;
   Lame lame;
-  std::vector<TetIndices> tets;     ///< node indices per tet (#tets)
-  std::vector<TetRest> rest;        ///< rest data per tet (#tets)
-  std::vector<double> node_mass;    ///< lumped mass, kg (#nodes): each tet gives rho V / 4 per corner
+  std::vector<TetIndices> tets;   ///< node indices per tet (#tets)
+  std::vector<TetRest> rest;      ///< rest data per tet (#tets)
+  std::vector<double> node_mass;  ///< lumped mass, kg (#nodes): each tet gives rho V / 4 per corner
   Index num_nodes = 0;
-  FastTetData fast;                 ///< acceleration data for internal_forces
+  FastTetData fast;  ///< acceleration data for internal_forces
 
   [[nodiscard]] Index num_tets() const { return static_cast<Index>(tets.size()); }
 };
@@ -56,13 +56,11 @@ void set_tet_rest(FemModel& model, Index e, const Mat34& rest_corners);
 /// After a plastic update moved the rest positions of `moved_nodes` (docs/method.md §2.4): set_tet_rest
 /// for every tet with a moved corner, from `rest_positions` (m, #nodes). This is the one way a
 /// model follows a new rest shape in place; after a cut (new tets) build a new model instead.
-void update_rest_shape(FemModel& model, const std::vector<Vec3>& rest_positions,
-                       const std::vector<Index>& moved_nodes);
+void update_rest_shape(FemModel& model, const std::vector<Vec3>& rest_positions, const std::vector<Index>& moved_nodes);
 
 /// Global internal force F(x) = sum_e F_e(x), N (#nodes), the straightforward way: per tet
 /// tet_internal_forces and a serial scatter-add in tet order. x: deformed positions, m (#nodes).
-void internal_forces_reference(const FemModel& model, const std::vector<Vec3>& x,
-                               std::vector<Vec3>& f);
+void internal_forces_reference(const FemModel& model, const std::vector<Vec3>& x, std::vector<Vec3>& f);
 /// Scratch memory of internal_forces: one force slot per (block, node of the block), 3 doubles each
 /// (N). Keep one per caller to avoid reallocating; its contents mean nothing between calls.
 struct ForceWorkspace {

@@ -16,13 +16,13 @@ inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
 /// A solid's constants. The defaults are the "porcelain" preset (a valid material, the paper's
 /// china vase), so `Material{}` and `Material{.density = 2300}` are usable as they are.
 struct Material {
-  std::string name = "porcelain";      ///< preset name or "custom"
-  double youngs_modulus = 70e9;        ///< E, Pa
-  double poisson_ratio = 0.22;         ///< nu, in (-1, 0.5)
-  double density = 2400;               ///< kg/m^3
-  double tensile_strength = 40e6;      ///< Pa (ultimate tensile strength); +inf = never cracks
-  double yield_stress = kInfinity;     ///< Pa (von Mises); +inf = perfectly elastic (brittle)
-  double fracture_toughness = 1.0e6;   ///< K_Ic, Pa*sqrt(m); +inf = not known / not used
+  std::string name = "porcelain";     ///< preset name or "custom"
+  double youngs_modulus = 70e9;       ///< E, Pa
+  double poisson_ratio = 0.22;        ///< nu, in (-1, 0.5)
+  double density = 2400;              ///< kg/m^3
+  double tensile_strength = 40e6;     ///< Pa (ultimate tensile strength); +inf = never cracks
+  double yield_stress = kInfinity;    ///< Pa (von Mises); +inf = perfectly elastic (brittle)
+  double fracture_toughness = 1.0e6;  ///< K_Ic, Pa*sqrt(m); +inf = not known / not used
 };
 
 /// Lamé constants, Pa.

@@ -33,14 +33,14 @@ struct CrackOptions {
 };
 
 struct CrackPlan {
-  Index origin_tet = -1;       ///< tet index in the planning mesh
-  Vec3 origin = Vec3::Zero();  ///< plane point: the origin tet's centroid, m
-  Vec3 normal = Vec3::UnitX(); ///< unit normal: principal direction of the largest tension
-  double stress = 0;           ///< largest principal stress at the origin, Pa
-  double radius = 0;           ///< r_frac, m
-  bool ductile = false;        ///< origin came from exceeding the maximum plastic strain
-  std::vector<Index> tets;     ///< region: tets reachable from the origin through faces whose
-                               ///< centroids lie within `radius` (sorted)
+  Index origin_tet = -1;        ///< tet index in the planning mesh
+  Vec3 origin = Vec3::Zero();   ///< plane point: the origin tet's centroid, m
+  Vec3 normal = Vec3::UnitX();  ///< unit normal: principal direction of the largest tension
+  double stress = 0;            ///< largest principal stress at the origin, Pa
+  double radius = 0;            ///< r_frac, m
+  bool ductile = false;         ///< origin came from exceeding the maximum plastic strain
+  std::vector<Index> tets;      ///< region: tets reachable from the origin through faces whose
+                                ///< centroids lie within `radius` (sorted)
 };
 
 /// Derived brittleness k (see CrackOptions::brittleness) for a body of size L (m).
@@ -51,15 +51,14 @@ double crack_radius(double stress, double strength, double brittleness, double r
 
 /// Tets reachable from `origin_tet` through shared faces with centroids within `radius` of `center`
 /// (sorted). The origin tet is always included.
-std::vector<Index> crack_region(const TetMesh& mesh, const NodeTets& incidence, Index origin_tet,
-                                const Vec3& center, double radius);
+std::vector<Index> crack_region(const TetMesh& mesh, const NodeTets& incidence, Index origin_tet, const Vec3& center,
+                                double radius);
 
 /// Plan up to max_cracks cracks: origins are tets whose largest principal stress exceeds the
 /// tensile strength, by decreasing stress (ties: lower tet index), each outside earlier regions.
 /// `ductile_origins` (tets over the maximum plastic strain) come first, with radius r_min.
-std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStress>& stress,
-                                   const Material& material, const CrackOptions& options = {},
-                                   const std::vector<Index>& ductile_origins = {});
+std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStress>& stress, const Material& material,
+                                   const CrackOptions& options = {}, const std::vector<Index>& ductile_origins = {});
 
 /// Exponentially time-averaged stress per tet: sigma_avg += (1 - exp(-dt / tau)) (sigma - sigma_avg).
 /// A stress must persist for about tau to count fully, so a one-step spike does not crack a body

@@ -13,7 +13,7 @@ namespace shatter {
 /// The plane {x : normal . (x - point) = 0}; `normal` is a unit vector, the + side is where it
 /// points.
 struct CutPlane {
-  Vec3 point = Vec3::Zero();   ///< m
+  Vec3 point = Vec3::Zero();  ///< m
   Vec3 normal = Vec3::UnitX();
 };
 

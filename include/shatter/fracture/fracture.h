@@ -27,7 +27,7 @@ struct FractureOptions {
 /// cut did.
 struct CrackEvent {
   CrackPlan plan;
-  Index tets_marked = 0;       ///< tets in the crack region when it was cut
+  Index tets_marked = 0;  ///< tets in the crack region when it was cut
   Index tets_split = 0;
   Index edge_nodes = 0;
   Index nodes_duplicated = 0;

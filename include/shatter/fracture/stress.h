@@ -10,13 +10,13 @@
 namespace shatter {
 
 struct TetStress {
-  Mat3 sigma = Mat3::Zero();       ///< Cauchy stress, Pa
-  Vec3 principal = Vec3::Zero();   ///< principal stresses, Pa, descending (tension positive)
+  Mat3 sigma = Mat3::Zero();           ///< Cauchy stress, Pa
+  Vec3 principal = Vec3::Zero();       ///< principal stresses, Pa, descending (tension positive)
   Mat3 directions = Mat3::Identity();  ///< unit principal directions as columns (same order)
   /// The larger in magnitude of the largest tensile and largest compressive principal stress,
   /// signed (Pa): positive = tension (drawn red), negative = compression (green).
   double display = 0;
-  double von_mises = 0;            ///< von Mises equivalent stress, Pa
+  double von_mises = 0;  ///< von Mises equivalent stress, Pa
 };
 
 /// Principal values, directions, display and von Mises stress of one Cauchy stress tensor.

@@ -9,9 +9,9 @@
 namespace shatter {
 
 struct BoxMeshDef {
-  Vec3 min = Vec3::Zero();             ///< m
-  Vec3 max = Vec3::Ones();             ///< m
-  std::array<Index, 3> cells{1, 1, 1}; ///< cells along x, y, z (each >= 1)
+  Vec3 min = Vec3::Zero();              ///< m
+  Vec3 max = Vec3::Ones();              ///< m
+  std::array<Index, 3> cells{1, 1, 1};  ///< cells along x, y, z (each >= 1)
   /// Cells cut into 6 tets around the main diagonal (Kuhn; conforming, all cells alike) or
   /// 5 tets (one central tet; alternating parity so neighbouring cells conform).
   enum class Pattern { six, five } pattern = Pattern::six;

@@ -9,10 +9,10 @@ namespace shatter {
 
 /// Mass properties of a solid of constant density.
 struct MassProperties {
-  double volume = 0;                ///< m^3
-  double mass = 0;                  ///< kg
-  Vec3 center = Vec3::Zero();       ///< centre of mass, m
-  Mat3 inertia = Mat3::Zero();      ///< inertia tensor about the centre of mass, kg m^2
+  double volume = 0;            ///< m^3
+  double mass = 0;              ///< kg
+  Vec3 center = Vec3::Zero();   ///< centre of mass, m
+  Mat3 inertia = Mat3::Zero();  ///< inertia tensor about the centre of mass, kg m^2
 };
 
 /// Exact mass properties of the union of the mesh's tets at `density` (kg/m^3): each tet's second

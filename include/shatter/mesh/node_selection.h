@@ -15,13 +15,13 @@ namespace shatter {
 
 struct NodeSelector {
   enum class Kind { ids, box, plane, set } kind = Kind::ids;
-  std::vector<FileId> ids;   ///< kind ids: node ids as in the mesh file
-  Aabb box;                  ///< kind box: nodes with min - tol <= p <= max + tol (m)
-  Vec3 point = Vec3::Zero(); ///< kind plane: a point on the plane (m)
+  std::vector<FileId> ids;      ///< kind ids: node ids as in the mesh file
+  Aabb box;                     ///< kind box: nodes with min - tol <= p <= max + tol (m)
+  Vec3 point = Vec3::Zero();    ///< kind plane: a point on the plane (m)
   Vec3 normal = Vec3::UnitY();  ///< kind plane: normal (any length > 0)
   /// box and plane: distance tolerance, m. < 0: 1e-6 times the mesh's bounding-box diagonal.
   double tolerance = -1.0;
-  std::string set;           ///< kind set: name of a node set of the mesh
+  std::string set;  ///< kind set: name of a node set of the mesh
 };
 
 /// The selected node indices, sorted, without repeats. Errors (no field set; the caller adds it):

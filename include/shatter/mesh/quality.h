@@ -22,16 +22,16 @@ double signed_shape_measure(const Vec3& a, const Vec3& b, const Vec3& c, const V
 double aspect_ratio(const Mat34& x);
 
 struct QualitySummary {
-  double volume = 0;              ///< total signed volume, m^3
-  double min_tet_volume = 0;      ///< smallest signed tet volume, m^3
+  double volume = 0;          ///< total signed volume, m^3
+  double min_tet_volume = 0;  ///< smallest signed tet volume, m^3
   double max_tet_volume = 0;
-  double min_dihedral_deg = 0;    ///< over all tets, degrees
+  double min_dihedral_deg = 0;  ///< over all tets, degrees
   double max_dihedral_deg = 0;
   double min_aspect = 0;
   double max_aspect = 0;
   double mean_aspect = 0;
-  Index worst_aspect_tet = -1;    ///< tet index with the largest aspect ratio
-  Index min_dihedral_tet = -1;    ///< tet index with the smallest dihedral angle
+  Index worst_aspect_tet = -1;  ///< tet index with the largest aspect ratio
+  Index min_dihedral_tet = -1;  ///< tet index with the smallest dihedral angle
 };
 QualitySummary mesh_quality(const TetMesh& mesh);
 

@@ -12,14 +12,14 @@
 namespace shatter {
 
 struct TetMesh {
-  std::vector<Vec3> positions;        ///< node positions, m (#nodes)
-  std::vector<TetIndices> tets;       ///< node indices per tet, positive orientation (#tets)
+  std::vector<Vec3> positions;   ///< node positions, m (#nodes)
+  std::vector<TetIndices> tets;  ///< node indices per tet, positive orientation (#tets)
 
   // Optional attributes: each is either empty or has one entry per node / tet.
-  std::vector<FileId> node_ids;       ///< id of each node in its source file (#nodes); empty: i+1
-  std::vector<FileId> tet_ids;        ///< id of each tet in its source file (#tets); empty: e+1
-  std::vector<std::int32_t> tet_tags; ///< region / physical tag per tet (#tets); empty: none
-  std::vector<std::int32_t> node_tags;///< boundary marker per node (#nodes); empty: none
+  std::vector<FileId> node_ids;                         ///< id of each node in its source file (#nodes); empty: i+1
+  std::vector<FileId> tet_ids;                          ///< id of each tet in its source file (#tets); empty: e+1
+  std::vector<std::int32_t> tet_tags;                   ///< region / physical tag per tet (#tets); empty: none
+  std::vector<std::int32_t> node_tags;                  ///< boundary marker per node (#nodes); empty: none
   std::map<std::string, std::vector<Index>> node_sets;  ///< named node sets (node indices, sorted)
   std::map<std::string, std::vector<Index>> tet_sets;   ///< named tet sets (tet indices, sorted)
 
@@ -53,8 +53,7 @@ inline double signed_volume(const Vec3& a, const Vec3& b, const Vec3& c, const V
 }
 inline double signed_volume(const TetMesh& mesh, Index e) {
   const TetIndices& t = mesh.tets[e];
-  return signed_volume(mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]],
-                       mesh.positions[t[3]]);
+  return signed_volume(mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]], mesh.positions[t[3]]);
 }
 /// Sum of signed tet volumes, m^3.
 double total_volume(const TetMesh& mesh);
@@ -62,7 +61,6 @@ double total_volume(const TetMesh& mesh);
 /// Keep only the listed tets (in the given order) and the nodes they use (in increasing index
 /// order); ids, tags and sets follow. Returns the new mesh; `node_map` (if given) receives, for
 /// each new node, its index in `mesh`.
-TetMesh extract_tets(const TetMesh& mesh, const std::vector<Index>& tets,
-                     std::vector<Index>* node_map = nullptr);
+TetMesh extract_tets(const TetMesh& mesh, const std::vector<Index>& tets, std::vector<Index>* node_map = nullptr);
 
 }  // namespace shatter

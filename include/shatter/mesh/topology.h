@@ -41,10 +41,10 @@ TetFaces compute_faces(const TetMesh& mesh);
 
 /// A triangle surface: positions indexed by triangles.
 struct TriSurface {
-  std::vector<Vec3> positions;       ///< (#vertices)
-  std::vector<TriIndices> triangles; ///< outward oriented (#triangles)
-  std::vector<Index> vertex_node;    ///< tet-mesh node of each vertex (#vertices)
-  std::vector<Index> triangle_tet;   ///< tet each triangle bounds (#triangles)
+  std::vector<Vec3> positions;        ///< (#vertices)
+  std::vector<TriIndices> triangles;  ///< outward oriented (#triangles)
+  std::vector<Index> vertex_node;     ///< tet-mesh node of each vertex (#vertices)
+  std::vector<Index> triangle_tet;    ///< tet each triangle bounds (#triangles)
 };
 
 /// The boundary faces of the mesh as outward-oriented triangles, with only the boundary nodes as

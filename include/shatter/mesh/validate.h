@@ -10,14 +10,14 @@
 namespace shatter {
 
 enum class MeshProblemKind {
-  node_not_finite,      ///< NaN or Inf coordinate
-  index_out_of_range,   ///< tet references a node that does not exist
-  repeated_node,        ///< tet lists a node twice
-  degenerate_tet,       ///< |volume| below the threshold
-  inverted_tet,         ///< negative orientation (fixable by reorienting)
-  overshared_face,      ///< face shared by more than two tets
-  unreferenced_node,    ///< node used by no tet
-  attribute_size,       ///< an optional attribute array has the wrong length
+  node_not_finite,     ///< NaN or Inf coordinate
+  index_out_of_range,  ///< tet references a node that does not exist
+  repeated_node,       ///< tet lists a node twice
+  degenerate_tet,      ///< |volume| below the threshold
+  inverted_tet,        ///< negative orientation (fixable by reorienting)
+  overshared_face,     ///< face shared by more than two tets
+  unreferenced_node,   ///< node used by no tet
+  attribute_size,      ///< an optional attribute array has the wrong length
 };
 const char* to_string(MeshProblemKind kind);
 
@@ -37,8 +37,8 @@ struct ValidateOptions {
 };
 
 struct ValidationReport {
-  std::vector<MeshProblem> problems;           ///< capped per kind
-  std::vector<std::size_t> counts;             ///< exact count per MeshProblemKind
+  std::vector<MeshProblem> problems;  ///< capped per kind
+  std::vector<std::size_t> counts;    ///< exact count per MeshProblemKind
   [[nodiscard]] bool has_errors() const;
   [[nodiscard]] std::size_t count(MeshProblemKind kind) const;
 };
@@ -51,7 +51,6 @@ Index fix_orientation(TetMesh& mesh);
 
 /// Validate, reorient inverted tets (with one warning naming them), and fail on any other error.
 /// Unreferenced nodes are a warning. The error message lists the first problems found.
-Result<void> check_and_repair(TetMesh& mesh, const std::string& source_name,
-                              const ValidateOptions& options = {});
+Result<void> check_and_repair(TetMesh& mesh, const std::string& source_name, const ValidateOptions& options = {});
 
 }  // namespace shatter

@@ -34,10 +34,10 @@ struct BoxCsgDef {
 };
 
 struct BoxCsgReport {
-  double edge_length = 0;           ///< h used, m
-  std::array<Index, 3> grid{};      ///< intervals of the box-face grid along x, y, z
-  std::array<Index, 3> cells{};     ///< cells along x, y, z after subdivision
-  double exact_volume = 0;          ///< volume of the shape (sum of the inside grid cells), m^3
+  double edge_length = 0;        ///< h used, m
+  std::array<Index, 3> grid{};   ///< intervals of the box-face grid along x, y, z
+  std::array<Index, 3> cells{};  ///< cells along x, y, z after subdivision
+  double exact_volume = 0;       ///< volume of the shape (sum of the inside grid cells), m^3
 };
 
 /// Mesh a box-CSG shape (box_csg_boxes(sdf) must succeed; an error otherwise). Nodes in grid

@@ -57,8 +57,7 @@ struct ReferenceVolume {
 /// mesher's exact one, else (when `extrapolate` and the mesh has at most `max_tets` tets) a
 /// Richardson extrapolation from a stuffed mesh at h/2 (volume error ~ h^2, observed in
 /// tests/meshing): V ~ V(h/2) + (V(h/2) - V(h)) / 3. `mesh_volume`: the mesh's volume, m^3.
-std::optional<ReferenceVolume> reference_volume(const Sdf& sdf, const MeshShapeDef& def,
-                                                const MeshShapeResult& result, double mesh_volume,
-                                                bool extrapolate = true, Index max_tets = 500'000);
+std::optional<ReferenceVolume> reference_volume(const Sdf& sdf, const MeshShapeDef& def, const MeshShapeResult& result,
+                                                double mesh_volume, bool extrapolate = true, Index max_tets = 500'000);
 
 }  // namespace shatter

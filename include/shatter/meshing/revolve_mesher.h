@@ -47,12 +47,12 @@ struct RevolveDef {
 };
 
 struct RevolveReport {
-  double edge_length = 0;          ///< m
-  int segments = 0;                ///< angular segments N (at the largest radius)
-  int levels = 0;                  ///< angular levels used: down to N / 2^levels near the axis
-  std::int64_t profile_points = 0; ///< resampled profile vertices
-  std::int64_t triangles = 0;      ///< profile triangles
-  double exact_volume = 0;         ///< Pappus volume of the profile (after the transform), m^3
+  double edge_length = 0;           ///< m
+  int segments = 0;                 ///< angular segments N (at the largest radius)
+  int levels = 0;                   ///< angular levels used: down to N / 2^levels near the axis
+  std::int64_t profile_points = 0;  ///< resampled profile vertices
+  std::int64_t triangles = 0;       ///< profile triangles
+  double exact_volume = 0;          ///< Pappus volume of the profile (after the transform), m^3
 };
 
 /// Triangulation of a simple closed polygon (either orientation) without new points: ear

@@ -24,8 +24,21 @@ class SurfaceDistance;  // meshing/surface_sdf.h
 class Sdf {
  public:
   enum class Kind {
-    sphere, box, cylinder, capsule, cone, torus, ellipsoid, revolution, extrusion, surface,
-    unite, subtract, intersect, smooth_unite, transform,
+    sphere,
+    box,
+    cylinder,
+    capsule,
+    cone,
+    torus,
+    ellipsoid,
+    revolution,
+    extrusion,
+    surface,
+    unite,
+    subtract,
+    intersect,
+    smooth_unite,
+    transform,
   };
 
   /// Empty tree (evaluates to +inf); use the builders below.

@@ -28,7 +28,7 @@ struct ShapeFile {
 using SurfaceLoader = std::function<Result<TriSurface>(const std::string& path)>;
 
 struct ShapeJsonOptions {
-  std::string base_dir;          ///< folder that relative "file" paths start from
+  std::string base_dir;  ///< folder that relative "file" paths start from
   SurfaceLoader load_surface;
 };
 

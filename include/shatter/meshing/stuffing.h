@@ -58,13 +58,13 @@ struct StuffingDef {
 };
 
 struct StuffingReport {
-  double edge_length = 0;             ///< h used, m
-  std::int64_t lattice_vertices = 0;  ///< black + red lattice vertices evaluated
-  std::int64_t cut_points = 0;        ///< cut points kept after warping
-  std::int64_t warped = 0;            ///< lattice vertices warped onto the surface
-  int attempts = 1;                   ///< meshings tried to reach target_tets
+  double edge_length = 0;                ///< h used, m
+  std::int64_t lattice_vertices = 0;     ///< black + red lattice vertices evaluated
+  std::int64_t cut_points = 0;           ///< cut points kept after warping
+  std::int64_t warped = 0;               ///< lattice vertices warped onto the surface
+  int attempts = 1;                      ///< meshings tried to reach target_tets
   std::int64_t tets_before_grading = 0;  ///< tets of the uniform mesh (= tets without grading)
-  std::int64_t sharpened = 0;         ///< boundary node moves onto creases and corners
+  std::int64_t sharpened = 0;            ///< boundary node moves onto creases and corners
 };
 
 /// Mesh the inside (sdf < 0) of the shape. Nodes: used lattice vertices in lattice order, then cut

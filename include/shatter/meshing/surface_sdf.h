@@ -23,8 +23,7 @@ class SurfaceDistance {
   /// triangle, and closed enough that the winding number reaches ~1 inside. Triangles of zero
   /// area are dropped. Either orientation is accepted (inside-out surfaces are flipped).
   /// `name` (a file name) is used in error messages.
-  static Result<std::shared_ptr<const SurfaceDistance>> create(const TriSurface& surface,
-                                                               const std::string& name);
+  static Result<std::shared_ptr<const SurfaceDistance>> create(const TriSurface& surface, const std::string& name);
 
   /// Generalized winding number at p (1 inside a closed outward surface, 0 outside).
   [[nodiscard]] double winding_number(const Vec3& p) const;
@@ -50,10 +49,10 @@ class SurfaceDistance {
   /// Clusters farther than this many radii from the query use the dipole approximation.
   static constexpr double kFarField = 3.0;
   std::int32_t build(std::int32_t first, std::int32_t count);
-  std::vector<Tri> tris_;        ///< (#triangles)
-  std::vector<BvhNode> nodes_;   ///< root is nodes_[0]
+  std::vector<Tri> tris_;       ///< (#triangles)
+  std::vector<BvhNode> nodes_;  ///< root is nodes_[0]
   Aabb bounds_;
-  double orientation_ = 1.0;     ///< -1 when the input was inside-out
+  double orientation_ = 1.0;  ///< -1 when the input was inside-out
 };
 
 /// Distance from p to triangle (a, b, c) (Ericson, Real-Time Collision Detection, 5.1.5).

@@ -27,11 +27,11 @@ namespace shatter {
 /// The constant data of one body. The rest mesh is in the body frame: its centre of mass is the
 /// origin (make_body_model moves it there), so world positions are x = position + R(orientation) r.
 struct BodyModel {
-  TetMesh mesh;            ///< rest mesh, body frame, m
-  TetFaces faces;          ///< unique faces, face adjacency, boundary faces of `mesh`
-  TriSurface surface;      ///< boundary triangles (outward) over the boundary nodes
-  FemModel fem;            ///< material, model kind, per-tet rest data, lumped node masses
-  MassProperties mass;     ///< exact, about the centre of mass (the body-frame origin)
+  TetMesh mesh;         ///< rest mesh, body frame, m
+  TetFaces faces;       ///< unique faces, face adjacency, boundary faces of `mesh`
+  TriSurface surface;   ///< boundary triangles (outward) over the boundary nodes
+  FemModel fem;         ///< material, model kind, per-tet rest data, lumped node masses
+  MassProperties mass;  ///< exact, about the centre of mass (the body-frame origin)
 };
 
 /// Rigid motion of a body (docs/method.md §2.7, eq. 23).
@@ -45,8 +45,8 @@ struct RigidState {
 /// The changing data of one body.
 struct BodyState {
   RigidState rigid;
-  std::vector<double> plastic_strain;          ///< accumulated equivalent plastic strain (#tets)
-  std::optional<StressHistory> stress_history; ///< time-averaged stress (#tets), when used
+  std::vector<double> plastic_strain;           ///< accumulated equivalent plastic strain (#tets)
+  std::optional<StressHistory> stress_history;  ///< time-averaged stress (#tets), when used
   /// Pattern and factorization kept between impacts (a cache: not copyable, so the state is
   /// move-only; make_body_state creates it).
   std::unique_ptr<StaticSolver> solver;

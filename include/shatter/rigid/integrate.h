@@ -20,9 +20,9 @@ namespace shatter {
 
 /// A body's inertia as the integrator needs it.
 struct RigidInertia {
-  double inverse_mass = 0;                  ///< 1/kg (0: static or kinematic)
-  Mat3 inertia_body = Mat3::Identity();     ///< about the centre of mass, body frame, kg m^2
-  Mat3 inverse_inertia_body = Mat3::Zero(); ///< its inverse (0: no rotation)
+  double inverse_mass = 0;                   ///< 1/kg (0: static or kinematic)
+  Mat3 inertia_body = Mat3::Identity();      ///< about the centre of mass, body frame, kg m^2
+  Mat3 inverse_inertia_body = Mat3::Zero();  ///< its inverse (0: no rotation)
 };
 
 /// From exact mass properties (mass > 0 and a positive definite inertia; else the body is treated

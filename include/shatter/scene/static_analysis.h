@@ -26,17 +26,17 @@ struct StaticAnalysisOptions {
 /// Everything a static analysis computed. When the solver did not converge, `report` says why
 /// (report.converged false) and `results`, `fracture` are empty: nothing should be written.
 struct StaticAnalysis {
-  ResolvedStaticCase resolved;            ///< anchors and loads per node
-  FemModel model;                         ///< of the input mesh
+  ResolvedStaticCase resolved;  ///< anchors and loads per node
+  FemModel model;               ///< of the input mesh
   StaticProblem problem;
   StaticSolverOptions solver_options;
   StaticReport report;
-  std::vector<Vec3> deformed;             ///< equilibrium positions, m (#nodes)
-  std::vector<TetStress> stress;          ///< per tet at `deformed` (#tets)
+  std::vector<Vec3> deformed;     ///< equilibrium positions, m (#nodes)
+  std::vector<TetStress> stress;  ///< per tet at `deformed` (#tets)
   StaticResults results;
-  std::optional<FractureResult> fracture; ///< with options.fracture
-  Vec3 gravity_load = Vec3::Zero();       ///< total gravity load, N (zero without gravity)
-  double setup_ms = 0;                    ///< case resolution and model
+  std::optional<FractureResult> fracture;  ///< with options.fracture
+  Vec3 gravity_load = Vec3::Zero();        ///< total gravity load, N (zero without gravity)
+  double setup_ms = 0;                     ///< case resolution and model
   double fracture_ms = 0;
 };
 
@@ -63,7 +63,6 @@ struct StaticOutputs {
 /// (a mesh extension: vtu, vtk, msh, mesh, inp, node), the whole cut mesh, the cracks and the
 /// plastic rest shape. fragment_<k> files left by an earlier run with more fragments are removed.
 Result<StaticOutputs> write_static_outputs(const std::string& out_dir, const TetMesh& mesh,
-                                           const StaticAnalysis& analysis,
-                                           const std::string& fragment_format = "vtu");
+                                           const StaticAnalysis& analysis, const std::string& fragment_format = "vtu");
 
 }  // namespace shatter

@@ -14,8 +14,8 @@
 #include "shatter/fem/constitutive.h"
 #include "shatter/fem/material.h"
 #include "shatter/fracture/fracture.h"
-#include "shatter/mesh/tet_mesh.h"
 #include "shatter/mesh/node_selection.h"
+#include "shatter/mesh/tet_mesh.h"
 #include "shatter/solve/static_solver.h"
 
 namespace shatter {
@@ -23,45 +23,45 @@ namespace shatter {
 /// Nodes whose components are held at their rest position plus `displacement`.
 struct AnchorSpec {
   NodeSelector where;
-  std::uint8_t components = 7;         ///< bit c (0 = x, 1 = y, 2 = z) set = component held
-  Vec3 displacement = Vec3::Zero();    ///< prescribed displacement of the held components, m
-  std::string field;                   ///< JSON path, for messages ("anchors[1]")
+  std::uint8_t components = 7;       ///< bit c (0 = x, 1 = y, 2 = z) set = component held
+  Vec3 displacement = Vec3::Zero();  ///< prescribed displacement of the held components, m
+  std::string field;                 ///< JSON path, for messages ("anchors[1]")
 };
 
 /// External force on nodes: `force` on each selected node, or `total_force` spread over them.
 struct LoadSpec {
   NodeSelector where;
-  Vec3 force = Vec3::Zero();           ///< N: per node (per_node) or in total
-  bool per_node = true;                ///< "force" (true) or "total_force" (false)
+  Vec3 force = Vec3::Zero();  ///< N: per node (per_node) or in total
+  bool per_node = true;       ///< "force" (true) or "total_force" (false)
   /// How a total force is spread: equally per node, or by lumped boundary area (each boundary
   /// triangle whose three corners are selected gives a third of its area to each corner).
   enum class Distribution { equal, area } distribution = Distribution::equal;
-  std::string field;                   ///< JSON path ("loads[0]")
+  std::string field;  ///< JSON path ("loads[0]")
 };
 
 /// Solver settings as given in the case (absent = the solver's default).
 struct CaseSolverSettings {
-  std::optional<LinearSolverKind> linear_solver;  ///< "direct" | "pcg-jacobi" | "pcg-gauss-seidel"
-  std::optional<double> tolerance;            ///< relative residual tolerance of Newton
-  std::optional<double> linear_tolerance;     ///< relative tolerance of an iterative linear solver
+  std::optional<LinearSolverKind> linear_solver;      ///< "direct" | "pcg-jacobi" | "pcg-gauss-seidel"
+  std::optional<double> tolerance;                    ///< relative residual tolerance of Newton
+  std::optional<double> linear_tolerance;             ///< relative tolerance of an iterative linear solver
   std::optional<std::int64_t> linear_max_iterations;  ///< iteration limit of an iterative linear solver
-  std::optional<std::int64_t> max_iterations; ///< Newton iterations (per load step)
-  std::optional<std::int64_t> load_steps;     ///< load increments
+  std::optional<std::int64_t> max_iterations;         ///< Newton iterations (per load step)
+  std::optional<std::int64_t> load_steps;             ///< load increments
   std::optional<bool> line_search;
 };
 
 struct StaticCase {
-  std::string file;                    ///< the case file (for messages)
-  std::string name;                    ///< "name", or the case file's stem
-  Material material;                   ///< validated
+  std::string file;   ///< the case file (for messages)
+  std::string name;   ///< "name", or the case file's stem
+  Material material;  ///< validated
   ModelKind model = ModelKind::stvk;
-  std::vector<AnchorSpec> anchors;     ///< at least one
+  std::vector<AnchorSpec> anchors;  ///< at least one
   std::vector<LoadSpec> loads;
-  Vec3 gravity = Vec3::Zero();         ///< m/s^2; zero = off ("gravity": true gives (0, -9.81, 0))
+  Vec3 gravity = Vec3::Zero();  ///< m/s^2; zero = off ("gravity": true gives (0, -9.81, 0))
   CaseSolverSettings solver;
   /// The "fracture" section (crack, cut and plasticity options); used by `shatter static --fracture`.
   FractureOptions fracture;
-  bool fracture_given = false;         ///< the case has a "fracture" section
+  bool fracture_given = false;  ///< the case has a "fracture" section
 };
 
 /// Parse a case from JSON text; `file` names it in messages and gives the default name.
@@ -71,11 +71,11 @@ Result<StaticCase> read_static_case(const std::string& path);
 
 /// A case applied to a mesh.
 struct ResolvedStaticCase {
-  std::vector<std::uint8_t> held;      ///< held components per node, bits as AnchorSpec (#nodes)
-  std::vector<Vec3> prescribed;        ///< rest position + prescribed displacement, m (#nodes)
-  std::vector<Vec3> forces;            ///< external nodal forces without gravity, N (#nodes)
-  Vec3 total_load = Vec3::Zero();      ///< sum of `forces`, N
-  Index num_held_nodes = 0;            ///< nodes with at least one held component
+  std::vector<std::uint8_t> held;  ///< held components per node, bits as AnchorSpec (#nodes)
+  std::vector<Vec3> prescribed;    ///< rest position + prescribed displacement, m (#nodes)
+  std::vector<Vec3> forces;        ///< external nodal forces without gravity, N (#nodes)
+  Vec3 total_load = Vec3::Zero();  ///< sum of `forces`, N
+  Index num_held_nodes = 0;        ///< nodes with at least one held component
 };
 
 /// Select the nodes of every anchor and load. Errors name the case file and the JSON path: an id

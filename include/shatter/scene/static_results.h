@@ -20,21 +20,20 @@ struct StaticResults {
   std::vector<Vec3> max_direction;    ///< its unit direction (#tets)
   std::vector<double> von_mises;      ///< Pa (#tets)
 
-  Index max_displacement_node = -1;   ///< node of largest |u| (lowest index on ties)
-  double max_displacement = 0;        ///< m
-  Index max_principal_tet = -1;       ///< tet of largest principal stress (lowest index on ties)
-  double max_principal_stress = 0;    ///< Pa
+  Index max_displacement_node = -1;  ///< node of largest |u| (lowest index on ties)
+  double max_displacement = 0;       ///< m
+  Index max_principal_tet = -1;      ///< tet of largest principal stress (lowest index on ties)
+  double max_principal_stress = 0;   ///< Pa
   Index max_von_mises_tet = -1;
-  double max_von_mises = 0;           ///< Pa
+  double max_von_mises = 0;  ///< Pa
 };
 
 /// Displacements and stresses (by compute_stresses, fracture/stress.h) at the deformed positions x
 /// (m, #nodes).
-StaticResults compute_static_results(const FemModel& model, const TetMesh& rest_mesh,
-                                     const std::vector<Vec3>& x);
+StaticResults compute_static_results(const FemModel& model, const TetMesh& rest_mesh, const std::vector<Vec3>& x);
 /// The same from the stresses compute_stresses(model, x) already gave (#tets).
-StaticResults compute_static_results(const FemModel& model, const TetMesh& rest_mesh,
-                                     const std::vector<Vec3>& x, const std::vector<TetStress>& stress);
+StaticResults compute_static_results(const FemModel& model, const TetMesh& rest_mesh, const std::vector<Vec3>& x,
+                                     const std::vector<TetStress>& stress);
 
 /// displacements.csv: "node_id,ux,uy,uz" then one row per node (file ids, %.17g).
 Result<void> write_displacements_csv(const std::string& path, const TetMesh& mesh, const StaticResults& r);

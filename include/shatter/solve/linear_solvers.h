@@ -33,7 +33,7 @@ struct LinearSolverOptions {
   /// PCG stops when ||b - A x|| <= tol ||b||. The static solver loosens it per Newton iteration
   /// to what its own tolerance needs (inexact Newton), never below this value.
   double relative_tolerance = 1e-8;
-  int max_iterations = 2000;         ///< PCG iteration limit
+  int max_iterations = 2000;  ///< PCG iteration limit
   /// PCG starts from the x passed in (the previous solution, when the caller keeps it) instead of
   /// from zero. The direct solver ignores it.
   bool warm_start = false;
@@ -41,11 +41,11 @@ struct LinearSolverOptions {
 
 struct LinearSolveReport {
   bool converged = false;
-  int iterations = 0;              ///< PCG iterations (0 for the direct solver)
-  double relative_residual = 0;    ///< ||b - A x|| / ||b|| (0 when b = 0)
-  double time_ms = 0;              ///< wall time of the whole solve, ms
-  bool analyzed = false;           ///< direct: this call redid the symbolic analysis
-  std::string message;             ///< why it did not converge ("" when it did)
+  int iterations = 0;            ///< PCG iterations (0 for the direct solver)
+  double relative_residual = 0;  ///< ||b - A x|| / ||b|| (0 when b = 0)
+  double time_ms = 0;            ///< wall time of the whole solve, ms
+  bool analyzed = false;         ///< direct: this call redid the symbolic analysis
+  std::string message;           ///< why it did not converge ("" when it did)
 };
 
 /// A reusable solver: keeps the symbolic factorization (per pattern_id) and the work vectors.
@@ -64,10 +64,8 @@ class LinearSolver {
   [[nodiscard]] int symbolic_analyses() const { return symbolic_analyses_; }
 
  private:
-  LinearSolveReport solve_direct(const BlockSparseMatrix& a, const Eigen::VectorXd& b,
-                                 Eigen::VectorXd& x);
-  LinearSolveReport solve_pcg(const BlockSparseMatrix& a, const Eigen::VectorXd& b,
-                              Eigen::VectorXd& x);
+  LinearSolveReport solve_direct(const BlockSparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x);
+  LinearSolveReport solve_pcg(const BlockSparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x);
   bool invert_diagonal_blocks(const BlockSparseMatrix& a, std::string& message);
   void apply_preconditioner(const BlockSparseMatrix& a, const Eigen::VectorXd& r, Eigen::VectorXd& z) const;
 

@@ -10,8 +10,8 @@
 
 #include "shatter/core/error.h"
 #include "shatter/core/types.h"
-#include "shatter/fem/fem_model.h"
 #include "shatter/fem/assembly.h"
+#include "shatter/fem/fem_model.h"
 #include "shatter/solve/linear_solvers.h"
 
 namespace shatter {
@@ -31,7 +31,7 @@ struct StaticProblem {
 };
 
 struct StaticSolverOptions {
-  int max_newton_iterations = 20;            ///< per load step
+  int max_newton_iterations = 20;  ///< per load step
   /// Converged when ||f_ext - F(x)|| over the free components <= tol * reference, reference =
   /// ||f_ext|| over the free components (or, with no load, the initial imbalance that the
   /// prescribed anchor positions cause). Where round-off keeps the residual above that (stiff
@@ -41,8 +41,8 @@ struct StaticSolverOptions {
   /// Backtracking (Armijo) on the potential energy U(x) - f_ext^T x. Without it a step is only
   /// tried at full length (and still rejected when the energy rises or turns non-finite).
   bool line_search = true;
-  bool project_psd = true;                   ///< PSD-project each element stiffness
-  int load_increments = 1;                   ///< equal load steps to start with
+  bool project_psd = true;  ///< PSD-project each element stiffness
+  int load_increments = 1;  ///< equal load steps to start with
   /// A load step that fails (energy cannot decrease, non-finite values, no convergence) is
   /// retried at half the size, at most this many times in the whole solve.
   int max_load_halvings = 6;
@@ -59,14 +59,14 @@ struct StaticSolverOptions {
 /// is what a caller can act on, and load_fraction < 1 with the message already says that load
 /// stepping gave up (and at which fraction).
 enum class SolveStatus {
-  converged,            ///< equilibrium within the tolerance (or at round-off level) at the full load
+  converged,  ///< equilibrium within the tolerance (or at round-off level) at the full load
   /// Rejected before any iteration, x left as passed in: a non-finite initial position, force,
   /// anchor position, gravity or total load, invalid Lame constants, or a degenerate rest tet.
   invalid_input,
   /// Internal forces turned non-finite (overflow): at the prescribed anchor positions (x is then the
   /// initial x) or during a load step.
   not_finite,
-  no_convergence,       ///< max_newton_iterations reached without meeting the tolerance
+  no_convergence,  ///< max_newton_iterations reached without meeting the tolerance
   /// The Newton step cannot lower the energy: not a descent direction (possible without PSD
   /// projection), or no step length along it does.
   line_search_failed,
@@ -90,7 +90,7 @@ struct StaticReport {
   double force_ms = 0;              ///< internal forces and energies
   double total_ms = 0;
   SolveStatus status = SolveStatus::no_convergence;  ///< how it ended (a default report has not converged)
-  std::string message;              ///< why it did not converge ("" when it did)
+  std::string message;                               ///< why it did not converge ("" when it did)
 };
 
 /// Keeps what can be reused between solves with the same tets and anchors.
@@ -146,15 +146,15 @@ class StaticSolver {
   bool has_pattern_ = false;
   int pattern_builds_ = 0;
   LinearSolver linear_;
-  std::vector<Vec3> force_;          ///< internal forces, N (#nodes; valid on active tets' nodes)
-  std::vector<Mat34> tet_force_;     ///< forces per active tet, N (#active tets)
+  std::vector<Vec3> force_;              ///< internal forces, N (#nodes; valid on active tets' nodes)
+  std::vector<Mat34> tet_force_;         ///< forces per active tet, N (#active tets)
   std::vector<double> force_error_;      ///< squared round-off estimate per component of force_, N^2 (#nodes)
   std::vector<double> tet_force_error_;  ///< round-off estimate per force component per active tet, N
-  Eigen::VectorXd first_step_;       ///< first Newton step of the last load step (#DOFs)
+  Eigen::VectorXd first_step_;           ///< first Newton step of the last load step (#DOFs)
 };
 
 /// One-off solve (builds a StaticSolver).
-Result<StaticReport> solve_static(const FemModel& model, const StaticProblem& problem,
-                                  std::vector<Vec3>& x, const StaticSolverOptions& options = {});
+Result<StaticReport> solve_static(const FemModel& model, const StaticProblem& problem, std::vector<Vec3>& x,
+                                  const StaticSolverOptions& options = {});
 
 }  // namespace shatter

@@ -23,28 +23,25 @@ Result<std::string> read_file(const std::string& path, std::uint64_t max_bytes) 
   const std::streamoff size = in.tellg();
   if (size < 0) return file_error(path, "cannot determine the file size");
   if (static_cast<std::uint64_t>(size) > max_bytes)
-    return file_error(path, "file is " + std::to_string(size) + " bytes, larger than the limit of " +
-                                std::to_string(max_bytes));
+    return file_error(
+        path, "file is " + std::to_string(size) + " bytes, larger than the limit of " + std::to_string(max_bytes));
   in.seekg(0, std::ios::beg);
   std::string data(static_cast<std::size_t>(size), '\0');
   if (size > 0 && !in.read(data.data(), size)) return file_error(path, "read failed");
   return data;
 }
 
-Result<void> write_file_atomic(const std::string& path,
-                               const std::function<Result<void>(std::ostream&)>& write) {
+Result<void> write_file_atomic(const std::string& path, const std::function<Result<void>(std::ostream&)>& write) {
   const fs::path target(path);
   if (target.filename().empty()) return file_error(path, "output path names no file");
   std::error_code ec;
   if (fs::is_directory(target, ec)) return file_error(path, "is a directory, expected a file path");
-  const fs::path tmp = target.parent_path() /
-                       ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()));
+  const fs::path tmp = target.parent_path() / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()));
   Result<void> status;
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     if (!out) {
-      return file_error(path, std::string("cannot open a temporary for writing beside it: ") +
-                                  std::strerror(errno));
+      return file_error(path, std::string("cannot open a temporary for writing beside it: ") + std::strerror(errno));
     }
     try {
       status = write(out);

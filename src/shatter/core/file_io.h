@@ -17,8 +17,7 @@ Result<std::string> read_file(const std::string& path, std::uint64_t max_bytes =
 
 /// Write `path` atomically: `write` fills a stream opened on a temporary in the same folder; if it
 /// returns an Error, throws, or the stream fails, the temporary is removed and `path` is untouched.
-Result<void> write_file_atomic(const std::string& path,
-                               const std::function<Result<void>(std::ostream&)>& write);
+Result<void> write_file_atomic(const std::string& path, const std::function<Result<void>(std::ostream&)>& write);
 /// Convenience: write bytes atomically.
 Result<void> write_file_atomic(const std::string& path, std::string_view content);
 

@@ -15,9 +15,7 @@ void Hasher::add_bytes(const void* data, std::size_t size) {
 }
 std::uint64_t Hasher::digest() const { return XXH64_digest(static_cast<XXH64_state_t*>(state_)); }
 
-std::uint64_t hash_bytes(const void* data, std::size_t size, std::uint64_t seed) {
-  return XXH64(data, size, seed);
-}
+std::uint64_t hash_bytes(const void* data, std::size_t size, std::uint64_t seed) { return XXH64(data, size, seed); }
 
 std::string hash_to_hex(std::uint64_t hash) {
   char buf[17];

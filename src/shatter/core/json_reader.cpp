@@ -42,9 +42,7 @@ Where Where::key(std::string_view k) const {
   return w;
 }
 
-Where Where::index(std::size_t i) const {
-  return Where{file, path + "[" + std::to_string(i) + "]"};
-}
+Where Where::index(std::size_t i) const { return Where{file, path + "[" + std::to_string(i) + "]"}; }
 
 Error Where::error(std::string message) const {
   Error e = field_error(path.empty() ? std::string("(top level)") : path, std::move(message));

@@ -8,8 +8,8 @@ namespace shatter {
 namespace {
 void default_sink(LogLevel level, std::string_view message) {
   if (level < LogLevel::warning) return;
-  std::fprintf(stderr, "%s: %.*s\n", level == LogLevel::warning ? "warning" : "error",
-               static_cast<int>(message.size()), message.data());
+  std::fprintf(stderr, "%s: %.*s\n", level == LogLevel::warning ? "warning" : "error", static_cast<int>(message.size()),
+               message.data());
 }
 LogSink& sink() {
   static LogSink s = default_sink;

@@ -25,8 +25,7 @@ BlockSparseMatrix::BlockSparseMatrix(Index num_nodes, const std::vector<TetIndic
                                      const std::vector<AnchorMask>& anchors)
     : pattern_id_(next_pattern_id()) {
   SHATTER_CHECK(anchors.empty() || static_cast<Index>(anchors.size()) == num_nodes);
-  anchors_ = anchors.empty() ? std::vector<AnchorMask>(static_cast<std::size_t>(num_nodes), anchor_none)
-                             : anchors;
+  anchors_ = anchors.empty() ? std::vector<AnchorMask>(static_cast<std::size_t>(num_nodes), anchor_none) : anchors;
   for (AnchorMask& m : anchors_) m &= anchor_all;
 
   // Active nodes: in some tet, with a free component. Numbered in node order.
@@ -61,8 +60,10 @@ BlockSparseMatrix::BlockSparseMatrix(Index num_nodes, const std::vector<TetIndic
     std::sort(candidates.begin(), candidates.end());
     Index color = 0;
     for (Index c : candidates) {
-      if (c == color) ++color;
-      else if (c > color) break;
+      if (c == color)
+        ++color;
+      else if (c > color)
+        break;
     }
     for (Index v : t) node_colors[v].push_back(color);
     active.push_back(e);
@@ -165,11 +166,14 @@ void BlockSparseMatrix::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) c
   const int* outer = matrix_.outerIndexPtr();
   const int* inner = matrix_.innerIndexPtr();
   const double* v = values();
-  parallel_for(0, size(), [&](std::int64_t r) {
-    double s = 0;
-    for (int p = outer[r]; p < outer[r + 1]; ++p) s += v[p] * x[inner[p]];
-    y[r] = s;
-  }, 16384);  // ~0.05 us per row, once per PCG iteration: parallel only for large systems
+  parallel_for(
+      0, size(),
+      [&](std::int64_t r) {
+        double s = 0;
+        for (int p = outer[r]; p < outer[r + 1]; ++p) s += v[p] * x[inner[p]];
+        y[r] = s;
+      },
+      16384);  // ~0.05 us per row, once per PCG iteration: parallel only for large systems
 }
 
 void BlockSparseMatrix::add_element(Index slot, const Mat12& k) {
@@ -208,8 +212,7 @@ Mat12 element_stiffness(const FemModel& model, Index e, const Mat34& xe, bool ma
   Mat12 k = tet_stiffness(model.model, model.lame, model.rest[e], xe);
   if (make_psd) {
     switch (model.model) {
-      case ModelKind::linear:
-        break;  // constant and positive semi-definite
+      case ModelKind::linear: break;  // constant and positive semi-definite
       case ModelKind::stvk: {
         // K = K_material + V (B S B^T) (x) I: the material part is PSD (mu > 0, bulk modulus > 0),
         // the geometric part is PSD iff S is. Remove the negative part of S from it.
@@ -229,16 +232,14 @@ Mat12 element_stiffness(const FemModel& model, Index e, const Mat34& xe, bool ma
           for (int j = 0; j < 4; ++j) k.block<3, 3>(3 * i, 3 * j).diagonal().array() -= g(i, j);
         break;
       }
-      case ModelKind::corotated:
-        k = project_psd(k);
-        break;
+      case ModelKind::corotated: k = project_psd(k); break;
     }
   }
   return 0.5 * (k + k.transpose());  // exactly symmetric: the storage relies on it
 }
 
-void assemble_stiffness(const FemModel& model, const std::vector<Vec3>& x,
-                        const AssemblyOptions& options, BlockSparseMatrix& matrix) {
+void assemble_stiffness(const FemModel& model, const std::vector<Vec3>& x, const AssemblyOptions& options,
+                        BlockSparseMatrix& matrix) {
   SHATTER_CHECK(static_cast<Index>(x.size()) == matrix.num_nodes());
   matrix.refill([&](Index e) -> Mat12 {
     Mat34 xe;

@@ -13,9 +13,7 @@ namespace {
 Mat3 green_strain(const Mat3& F) { return 0.5 * (F.transpose() * F - Mat3::Identity()); }
 
 // S = 2 mu E + lambda tr(E) I.
-Mat3 stvk_S(const Lame& l, const Mat3& E) {
-  return 2.0 * l.mu * E + l.lambda * E.trace() * Mat3::Identity();
-}
+Mat3 stvk_S(const Lame& l, const Mat3& E) { return 2.0 * l.mu * E + l.lambda * E.trace() * Mat3::Identity(); }
 
 // Small strain eps = (F + F^T)/2 - I.
 Mat3 small_strain(const Mat3& F) { return 0.5 * (F + F.transpose()) - Mat3::Identity(); }
@@ -39,8 +37,7 @@ Result<ModelKind> parse_model_kind(std::string_view name) {
   if (name == "stvk") return ModelKind::stvk;
   if (name == "linear") return ModelKind::linear;
   if (name == "corotated") return ModelKind::corotated;
-  return field_error("model", "unknown constitutive model '" + std::string(name) +
-                                  "'; valid: stvk, linear, corotated");
+  return field_error("model", "unknown constitutive model '" + std::string(name) + "'; valid: stvk, linear, corotated");
 }
 
 const char* to_string(ModelKind kind) {
@@ -90,8 +87,7 @@ double energy_density(ModelKind kind, const Lame& l, const Mat3& F) {
 
 Mat3 first_piola(ModelKind kind, const Lame& l, const Mat3& F) {
   switch (kind) {
-    case ModelKind::stvk:
-      return F * stvk_S(l, green_strain(F));  // P = F S
+    case ModelKind::stvk: return F * stvk_S(l, green_strain(F));  // P = F S
     case ModelKind::linear: {
       const Mat3 e = small_strain(F);
       return 2.0 * l.mu * e + l.lambda * e.trace() * Mat3::Identity();

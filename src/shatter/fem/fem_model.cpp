@@ -86,10 +86,9 @@ namespace detail {
 // StVK forces of the tets [lo, hi) of one block (lo a multiple of 4) in their QR-rotated rest frames
 // (docs/method.md §2.1-2.2, §3): F' = Ds R^-1, S' = 2 mu E' + lambda tr(E') I, H = V F' S' R^-T,
 // [f1 f2 f3] = H, f0 = -(f1 + f2 + f3); added into the block's slots in tet order.
-__attribute__((target_clones("avx2", "default")))
-void stvk_forces_block(const double* packed, const TetIndices* tets, const std::int32_t* corner_slot,
-                       const Vec3* x, std::int64_t lo, std::int64_t hi, double mu, double lambda,
-                       double* slots) {
+[[gnu::target_clones("avx2", "default")]]
+void stvk_forces_block(const double* packed, const TetIndices* tets, const std::int32_t* corner_slot, const Vec3* x,
+                       std::int64_t lo, std::int64_t hi, double mu, double lambda, double* slots) {
   for (std::int64_t g0 = lo; g0 < hi; g0 += 4) {
     const int lanes = static_cast<int>(std::min<std::int64_t>(4, hi - g0));
     // Gather Ds = [x1 - x0, x2 - x0, x3 - x0] per lane (built in registers: no store-to-load
@@ -99,14 +98,15 @@ void stvk_forces_block(const double* packed, const TetIndices* tets, const std::
       const TetIndices& t = tets[g0 + (l < lanes ? l : 0)];
       for (int k = 0; k < 4; ++k) c[l][k] = &x[t[k]];
     }
-#define SHATTER_EDGE(k, a)                                                    \
+    // clang-format off
+#define SHATTER_EDGE(k, a) \
   Lanes{(*c[0][k])[a] - (*c[0][0])[a], (*c[1][k])[a] - (*c[1][0])[a], \
         (*c[2][k])[a] - (*c[2][0])[a], (*c[3][k])[a] - (*c[3][0])[a]}
     const double* r = packed + 7 * g0;  // 7 lane vectors per group of 4 tets
 #define SHATTER_LOAD(p) Lanes{(p)[0], (p)[1], (p)[2], (p)[3]}
-    const Lanes r00 = SHATTER_LOAD(r), r01 = SHATTER_LOAD(r + 4), r02 = SHATTER_LOAD(r + 8),
-                r11 = SHATTER_LOAD(r + 12), r12 = SHATTER_LOAD(r + 16), r22 = SHATTER_LOAD(r + 20),
-                vol = SHATTER_LOAD(r + 24);
+    // clang-format on
+    const Lanes r00 = SHATTER_LOAD(r), r01 = SHATTER_LOAD(r + 4), r02 = SHATTER_LOAD(r + 8), r11 = SHATTER_LOAD(r + 12),
+                r12 = SHATTER_LOAD(r + 16), r22 = SHATTER_LOAD(r + 20), vol = SHATTER_LOAD(r + 24);
 #undef SHATTER_LOAD
     const Lanes d0x = SHATTER_EDGE(1, 0), d0y = SHATTER_EDGE(1, 1), d0z = SHATTER_EDGE(1, 2);
     const Lanes d1x = SHATTER_EDGE(2, 0), d1y = SHATTER_EDGE(2, 1), d1z = SHATTER_EDGE(2, 2);
@@ -118,10 +118,8 @@ void stvk_forces_block(const double* packed, const TetIndices* tets, const std::
     const Lanes cx = d0x * r02 + d1x * r12 + d2x * r22, cy = d0y * r02 + d1y * r12 + d2y * r22,
                 cz = d0z * r02 + d1z * r12 + d2z * r22;
     // C = F'^T F'.
-    const Lanes caa = ax * ax + ay * ay + az * az, cbb = bx * bx + by * by + bz * bz,
-                ccc = cx * cx + cy * cy + cz * cz;
-    const Lanes cab = ax * bx + ay * by + az * bz, cac = ax * cx + ay * cy + az * cz,
-                cbc = bx * cx + by * cy + bz * cz;
+    const Lanes caa = ax * ax + ay * ay + az * az, cbb = bx * bx + by * by + bz * bz, ccc = cx * cx + cy * cy + cz * cz;
+    const Lanes cab = ax * bx + ay * by + az * bz, cac = ax * cx + ay * cy + az * cz, cbc = bx * cx + by * cy + bz * cz;
     // V S' = V (mu (C - I) + lambda/2 (tr C - 3) I).
     const Lanes vmu = vol * mu, vlh = vol * (0.5 * lambda);
     const Lanes ltr = vlh * (caa + cbb + ccc - 3.0);
@@ -140,8 +138,8 @@ void stvk_forces_block(const double* packed, const TetIndices* tets, const std::
                 f1z = pz * r00 + qz * r01 + sz * r02;
     const Lanes f2x = qx * r11 + sx * r12, f2y = qy * r11 + sy * r12, f2z = qz * r11 + sz * r12;
     const Lanes f3x = sx * r22, f3y = sy * r22, f3z = sz * r22;
-    const Lanes out[12] = {-(f1x + f2x + f3x), -(f1y + f2y + f3y), -(f1z + f2z + f3z),
-                           f1x, f1y, f1z, f2x, f2y, f2z, f3x, f3y, f3z};
+    const Lanes out[12] = {
+        -(f1x + f2x + f3x), -(f1y + f2y + f3y), -(f1z + f2z + f3z), f1x, f1y, f1z, f2x, f2y, f2z, f3x, f3y, f3z};
     // Scatter in tet order.
     for (int l = 0; l < lanes; ++l) {
       const std::int32_t* cs = corner_slot + 4 * (g0 + l);
@@ -157,10 +155,6 @@ void stvk_forces_block(const double* packed, const TetIndices* tets, const std::
 
 }  // namespace detail
 #pragma GCC diagnostic pop
-
-namespace {
-
-}  // namespace
 
 FemModel make_fem_model(const TetMesh& rest_mesh, const Material& material, ModelKind kind) {
   FemModel model;
@@ -233,30 +227,33 @@ void internal_forces(const FemModel& model, const std::vector<Vec3>& x, std::vec
   double* acc = scratch.data();
   const Vec3* xp = x.data();
   // 1. Per block, in tet order: tet forces added into the block's own slots.
-  parallel_for(0, n_blocks, [&](std::int64_t b) {
-    double* slots = acc + 3 * fd.block_slot_begin[static_cast<std::size_t>(b)];
-    const std::int64_t n_block_slots = fd.block_slot_begin[static_cast<std::size_t>(b) + 1] -
-                                       fd.block_slot_begin[static_cast<std::size_t>(b)];
-    std::fill(slots, slots + 3 * n_block_slots, 0.0);
-    const std::int64_t lo = b * fd.block_size, hi = std::min(n_tets, lo + fd.block_size);
-    if (model.model == ModelKind::stvk) {
-      detail::stvk_forces_block(fd.packed.data(), model.tets.data(), fd.corner_slot.data(), xp, lo, hi,
-                                model.lame.mu, model.lame.lambda, slots);
-      return;
-    }
-    for (std::int64_t e = lo; e < hi; ++e) {
-      const TetIndices& t = model.tets[static_cast<std::size_t>(e)];
-      Mat34 xe;
-      for (int k = 0; k < 4; ++k) xe.col(k) = xp[t[k]];
-      const Mat34 fe = tet_internal_forces(model.model, model.lame, model.rest[static_cast<std::size_t>(e)], xe);
-      for (int k = 0; k < 4; ++k) {
-        double* s = slots + fd.corner_slot[static_cast<std::size_t>(4 * e + k)];
-        s[0] += fe(0, k);
-        s[1] += fe(1, k);
-        s[2] += fe(2, k);
-      }
-    }
-  }, 2);
+  parallel_for(
+      0, n_blocks,
+      [&](std::int64_t b) {
+        double* slots = acc + 3 * fd.block_slot_begin[static_cast<std::size_t>(b)];
+        const std::int64_t n_block_slots =
+            fd.block_slot_begin[static_cast<std::size_t>(b) + 1] - fd.block_slot_begin[static_cast<std::size_t>(b)];
+        std::fill(slots, slots + 3 * n_block_slots, 0.0);
+        const std::int64_t lo = b * fd.block_size, hi = std::min(n_tets, lo + fd.block_size);
+        if (model.model == ModelKind::stvk) {
+          detail::stvk_forces_block(fd.packed.data(), model.tets.data(), fd.corner_slot.data(), xp, lo, hi,
+                                    model.lame.mu, model.lame.lambda, slots);
+          return;
+        }
+        for (std::int64_t e = lo; e < hi; ++e) {
+          const TetIndices& t = model.tets[static_cast<std::size_t>(e)];
+          Mat34 xe;
+          for (int k = 0; k < 4; ++k) xe.col(k) = xp[t[k]];
+          const Mat34 fe = tet_internal_forces(model.model, model.lame, model.rest[static_cast<std::size_t>(e)], xe);
+          for (int k = 0; k < 4; ++k) {
+            double* s = slots + fd.corner_slot[static_cast<std::size_t>(4 * e + k)];
+            s[0] += fe(0, k);
+            s[1] += fe(1, k);
+            s[2] += fe(2, k);
+          }
+        }
+      },
+      2);
   // 2. Per node: its slots' sums in block order.
   f.resize(x.size());
   parallel_for(0, model.num_nodes, [&](std::int64_t n) {

@@ -99,8 +99,7 @@ Mat12 tet_stiffness(ModelKind kind, const Lame& lame, const TetRest& rest, const
     }
     case ModelKind::linear:
       return stiffness_closed_form(lame, rest.volume, shape_gradients(rest), Mat3::Identity(), Mat3::Zero());
-    case ModelKind::corotated:
-      break;
+    case ModelKind::corotated: break;
   }
   return tet_stiffness_from_differential(kind, lame, rest, x);
 }

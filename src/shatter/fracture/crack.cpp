@@ -35,8 +35,8 @@ double crack_radius(double stress, double strength, double brittleness, double r
   return std::max(r_min, r0 * std::min(1.0, brittleness * excess));
 }
 
-std::vector<Index> crack_region(const TetMesh& mesh, const NodeTets& incidence, Index origin_tet,
-                                const Vec3& center, double radius) {
+std::vector<Index> crack_region(const TetMesh& mesh, const NodeTets& incidence, Index origin_tet, const Vec3& center,
+                                double radius) {
   std::vector<char> seen(mesh.tets.size(), 0);
   std::vector<Index> out{origin_tet};
   seen[origin_tet] = 1;
@@ -52,9 +52,8 @@ std::vector<Index> crack_region(const TetMesh& mesh, const NodeTets& incidence, 
   return out;
 }
 
-std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStress>& stress,
-                                   const Material& material, const CrackOptions& options,
-                                   const std::vector<Index>& ductile_origins) {
+std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStress>& stress, const Material& material,
+                                   const CrackOptions& options, const std::vector<Index>& ductile_origins) {
   SHATTER_CHECK(stress.size() == mesh.tets.size());
   std::vector<CrackPlan> plans;
   if (options.max_cracks <= 0 || mesh.tets.empty()) return plans;

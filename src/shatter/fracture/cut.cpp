@@ -8,7 +8,6 @@
 
 #include "shatter/core/assert.h"
 #include "shatter/mesh/topology.h"
-#include "shatter/mesh/topology.h"
 
 namespace shatter {
 namespace {
@@ -70,8 +69,8 @@ struct Piece {
 /// vertex over its faces, each face fanned from its own lowest-index vertex (so a face shared by
 /// two tets is triangulated the same way by both). Returns false if a piece is below min_volume.
 template <class EdgeNode, class Pos>
-bool split_tet(const TetIndices& g, const std::array<int, 4>& s, EdgeNode&& edge_node, Pos&& pos,
-               double min_volume, std::vector<Piece>& out) {
+bool split_tet(const TetIndices& g, const std::array<int, 4>& s, EdgeNode&& edge_node, Pos&& pos, double min_volume,
+               std::vector<Piece>& out) {
   std::array<Index, 4> section{};
   std::array<std::array<int, 2>, 4> section_local{};  // local corners of the edge (or {z, z})
   int ns = 0;
@@ -311,8 +310,10 @@ CutResult split_along_plane(const TetMesh& mesh, const CutPlane& plane, const st
       plus += sign[v] > 0;
       minus += sign[v] < 0;
     }
-    if (plus > 0 && minus == 0) r.tet_side[e] = 1;
-    else if (minus > 0 && plus == 0) r.tet_side[e] = -1;
+    if (plus > 0 && minus == 0)
+      r.tet_side[e] = 1;
+    else if (minus > 0 && plus == 0)
+      r.tet_side[e] = -1;
     else {
       const Vec3 c = mesh.corners(e).rowwise().mean();
       r.tet_side[e] = plane.normal.dot(c - plane.point) >= 0 ? 1 : -1;
@@ -428,9 +429,12 @@ DisconnectResult disconnect_faces(const TetMesh& mesh, const std::vector<std::in
           std::array<Index, 2> others{};
           int no = 0;
           for (int k = 0; k < 4; ++k) {
-            if (mesh.tets[e][k] == u) cu = r.mesh.tets[e][k];
-            else if (mesh.tets[e][k] == w) cw = r.mesh.tets[e][k];
-            else others[no++] = r.mesh.tets[e][k];
+            if (mesh.tets[e][k] == u)
+              cu = r.mesh.tets[e][k];
+            else if (mesh.tets[e][k] == w)
+              cw = r.mesh.tets[e][k];
+            else
+              others[no++] = r.mesh.tets[e][k];
           }
           for (Index o : others) fan.push_back({cu, cw, o});
         }

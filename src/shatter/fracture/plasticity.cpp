@@ -82,13 +82,13 @@ PlasticResult apply_plasticity(const FemModel& model, const std::vector<Vec3>& r
   // (4)+(5) Move, keeping every rest tet above min_volume_fraction of its volume.
   for (int round = 0;; ++round) {
     for (Index i = 0; i < nn; ++i)
-      r.rest_positions[i] = w[i] > 0 ? Vec3(rest_positions[i] + w[i] * (unrotated(i) - rest_positions[i]))
-                                     : rest_positions[i];
+      r.rest_positions[i] =
+          w[i] > 0 ? Vec3(rest_positions[i] + w[i] * (unrotated(i) - rest_positions[i])) : rest_positions[i];
     bool bad = false;
     for (Index e = 0; e < nt; ++e) {
       const TetIndices& t = tets[e];
-      const double v = signed_volume(r.rest_positions[t[0]], r.rest_positions[t[1]], r.rest_positions[t[2]],
-                                     r.rest_positions[t[3]]);
+      const double v =
+          signed_volume(r.rest_positions[t[0]], r.rest_positions[t[1]], r.rest_positions[t[2]], r.rest_positions[t[3]]);
       if (v >= options.min_volume_fraction * vol[e]) continue;
       bad = true;
       for (Index i : t) w[i] = round >= 30 ? 0.0 : 0.5 * w[i];

@@ -26,19 +26,22 @@ TetStress analyze_stress(const Mat3& sigma) {
 std::vector<TetStress> compute_stresses(const FemModel& model, const std::vector<Vec3>& deformed) {
   SHATTER_CHECK(static_cast<Index>(deformed.size()) == model.num_nodes);
   std::vector<TetStress> out(model.tets.size());
-  parallel_for(0, model.num_tets(), [&](std::int64_t e) {
-    const auto t = static_cast<std::size_t>(e);
-    Mat34 x;
-    for (int k = 0; k < 4; ++k) x.col(k) = deformed[static_cast<std::size_t>(model.tets[t][k])];
-    out[t] = analyze_stress(cauchy_stress(model.model, model.lame, deformation_gradient(model.rest[t], x)));
-  }, 512);
+  parallel_for(
+      0, model.num_tets(),
+      [&](std::int64_t e) {
+        const auto t = static_cast<std::size_t>(e);
+        Mat34 x;
+        for (int k = 0; k < 4; ++k) x.col(k) = deformed[static_cast<std::size_t>(model.tets[t][k])];
+        out[t] = analyze_stress(cauchy_stress(model.model, model.lame, deformation_gradient(model.rest[t], x)));
+      },
+      512);
   return out;
 }
 
 std::vector<TetStress> analyze_stresses(const std::vector<Mat3>& sigma) {
   std::vector<TetStress> out(sigma.size());
-  parallel_for(0, static_cast<std::int64_t>(sigma.size()),
-               [&](std::int64_t e) { out[e] = analyze_stress(sigma[e]); }, 1024);
+  parallel_for(
+      0, static_cast<std::int64_t>(sigma.size()), [&](std::int64_t e) { out[e] = analyze_stress(sigma[e]); }, 1024);
   return out;
 }
 

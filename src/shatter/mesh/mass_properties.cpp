@@ -11,8 +11,8 @@ MassProperties mass_properties(const TetMesh& mesh, double density) {
   // Moments about a reference point near the body (its first node) to limit cancellation.
   const Vec3 ref = mesh.positions[mesh.tets[0][0]];
   double volume = 0;
-  Vec3 first = Vec3::Zero();  // integral of r dV
-  Mat3 second = Mat3::Zero(); // integral of r r^T dV
+  Vec3 first = Vec3::Zero();   // integral of r dV
+  Mat3 second = Mat3::Zero();  // integral of r r^T dV
   for (Index e = 0; e < mesh.num_tets(); ++e) {
     Vec3 r[4];
     for (int k = 0; k < 4; ++k) r[k] = mesh.positions[mesh.tets[e][k]] - ref;

@@ -46,8 +46,8 @@ Result<std::vector<Index>> select_nodes(const TetMesh& mesh, const NodeSelector&
             hi = std::max(hi, mesh.node_id(i));
           }
           return make_error("node id " + std::to_string(s.ids[k]) + " (entry " + std::to_string(k) +
-                            ") is not in the mesh (its node ids range from " + std::to_string(lo) +
-                            " to " + std::to_string(hi) + ")");
+                            ") is not in the mesh (its node ids range from " + std::to_string(lo) + " to " +
+                            std::to_string(hi) + ")");
         }
         out.push_back(it->second);
       }
@@ -62,8 +62,7 @@ Result<std::vector<Index>> select_nodes(const TetMesh& mesh, const NodeSelector&
       if (out.empty()) {
         const Aabb b = mesh.bounds();
         return make_error("the box " + fmt_vec(s.box.min) + ".." + fmt_vec(s.box.max) +
-                          " contains no node of the mesh (mesh bounds " + fmt_vec(b.min) + ".." +
-                          fmt_vec(b.max) + ")");
+                          " contains no node of the mesh (mesh bounds " + fmt_vec(b.min) + ".." + fmt_vec(b.max) + ")");
       }
       break;
     }
@@ -129,7 +128,7 @@ std::vector<double> lumped_boundary_area(const TetMesh& mesh, const std::vector<
 }
 
 bool holds_rigid_motion(const TetMesh& mesh, const std::vector<Index>& piece_nodes,
-                       const std::vector<std::uint8_t>& held) {
+                        const std::vector<std::uint8_t>& held) {
   Aabb box;
   for (Index i : piece_nodes) box.extend(mesh.positions[i]);
   const Vec3 centre = 0.5 * (box.min + box.max);

@@ -48,8 +48,10 @@ std::string describe_tet(const TetMesh& mesh, Index e) {
   std::ostringstream s;
   s << "tet " << mesh.tet_id(e) << " (nodes";
   for (Index v : mesh.tets[e]) {
-    if (v >= 0 && v < mesh.num_nodes()) s << ' ' << mesh.node_id(v);
-    else s << " <index " << v << '>';
+    if (v >= 0 && v < mesh.num_nodes())
+      s << ' ' << mesh.node_id(v);
+    else
+      s << " <index " << v << '>';
   }
   s << ')';
   return s.str();
@@ -159,7 +161,8 @@ Result<void> check_and_repair(TetMesh& mesh, const std::string& source_name, con
   if (total > 0) {
     std::size_t all = 0;
     for (int k = 0; k < kNumKinds; ++k)
-      if (k != static_cast<int>(MeshProblemKind::inverted_tet) && k != static_cast<int>(MeshProblemKind::unreferenced_node))
+      if (k != static_cast<int>(MeshProblemKind::inverted_tet) &&
+          k != static_cast<int>(MeshProblemKind::unreferenced_node))
         all += report.counts[k];
     if (all > 5) errors += "; and " + std::to_string(all - 5) + " more";
     return file_error(source_name, "invalid mesh: " + errors);
@@ -169,12 +172,15 @@ Result<void> check_and_repair(TetMesh& mesh, const std::string& source_name, con
     fix_orientation(mesh);
     std::string first;
     for (const MeshProblem& p : report.problems)
-      if (p.kind == MeshProblemKind::inverted_tet) { first = p.message; break; }
-    log_warning(source_name + ": reoriented " + std::to_string(inverted) + " negatively oriented tet(s), first: " + first);
+      if (p.kind == MeshProblemKind::inverted_tet) {
+        first = p.message;
+        break;
+      }
+    log_warning(source_name + ": reoriented " + std::to_string(inverted) +
+                " negatively oriented tet(s), first: " + first);
   }
   const std::size_t unused = report.count(MeshProblemKind::unreferenced_node);
-  if (unused > 0)
-    log_warning(source_name + ": " + std::to_string(unused) + " node(s) used by no tet");
+  if (unused > 0) log_warning(source_name + ": " + std::to_string(unused) + " node(s) used by no tet");
   return {};
 }
 

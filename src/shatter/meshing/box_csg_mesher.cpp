@@ -47,8 +47,7 @@ bool collect(const Sdf& s, const Sdf::Transform& xf, std::vector<Aabb>& out) {
       c.scale = xf.scale * t.scale;
       return collect(s.children()[0], c, out);
     }
-    default:
-      return false;
+    default: return false;
   }
 }
 
@@ -86,9 +85,7 @@ Grid make_grid(const Sdf& sdf, const std::vector<Aabb>& boxes) {
   return g;
 }
 
-Index pieces(double length, double h) {
-  return std::max<Index>(1, static_cast<Index>(std::llround(length / h)));
-}
+Index pieces(double length, double h) { return std::max<Index>(1, static_cast<Index>(std::llround(length / h))); }
 
 // Tets for cell size h: 6 per fine cell inside.
 std::int64_t count_tets(const Grid& g, double h) {
@@ -114,8 +111,9 @@ std::optional<std::vector<Aabb>> box_csg_boxes(const Sdf& sdf) {
 Result<TetMesh> mesh_box_csg(const Sdf& sdf, const BoxCsgDef& def, BoxCsgReport* report) {
   const auto boxes = box_csg_boxes(sdf);
   if (!boxes)
-    return make_error("box-CSG mesher: the shape is not made of axis-aligned boxes by union, difference "
-                      "and intersection");
+    return make_error(
+        "box-CSG mesher: the shape is not made of axis-aligned boxes by union, difference "
+        "and intersection");
   if (!(def.edge_length > 0) && def.target_tets <= 0)
     return field_error("edge_length", "expected an edge length > 0 m or a tet count > 0");
   const Grid g = make_grid(sdf, *boxes);
@@ -155,8 +153,8 @@ Result<TetMesh> mesh_box_csg(const Sdf& sdf, const BoxCsgDef& def, BoxCsgReport*
   const Index fx = static_cast<Index>(fine[0].size()) - 1, fy = static_cast<Index>(fine[1].size()) - 1,
               fz = static_cast<Index>(fine[2].size()) - 1;
   if (static_cast<double>(fx) * fy * fz > static_cast<double>(def.max_cells))
-    return field_error("edge_length", "box-CSG grid of " + std::to_string(fx) + " x " + std::to_string(fy) +
-                                          " x " + std::to_string(fz) + " cells is too large (limit " +
+    return field_error("edge_length", "box-CSG grid of " + std::to_string(fx) + " x " + std::to_string(fy) + " x " +
+                                          std::to_string(fz) + " cells is too large (limit " +
                                           std::to_string(def.max_cells) + ")");
 
   // Fine cells inside: those of an inside grid cell.

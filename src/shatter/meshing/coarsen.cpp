@@ -11,7 +11,6 @@
 
 #include "shatter/mesh/quality.h"
 
-
 namespace shatter {
 namespace {
 
@@ -66,7 +65,9 @@ struct Collapser {
     }
   }
 
-  [[nodiscard]] static bool contains(const TetIndices& t, Index v) { return std::find(t.begin(), t.end(), v) != t.end(); }
+  [[nodiscard]] static bool contains(const TetIndices& t, Index v) {
+    return std::find(t.begin(), t.end(), v) != t.end();
+  }
 
   // Lk(a) and Lk(b) may only share what Lk(ab) has (Dey et al. 1999): otherwise the collapse
   // would glue distinct simplices together.
@@ -79,7 +80,8 @@ struct Collapser {
     for (auto* v : {&va, &vb, &vab, &common}) v->clear();
     for (auto* v : {&ea, &eb, &eab, &common_edges}) v->clear();
     for (auto* v : {&fa, &fb, &common_faces}) v->clear();
-    auto add_link = [&](Index x, Index other, std::vector<Index>& verts, std::vector<Edge>& edges, std::vector<Face>& tris) {
+    auto add_link = [&](Index x, Index other, std::vector<Index>& verts, std::vector<Edge>& edges,
+                        std::vector<Face>& tris) {
       for (Index e : star[static_cast<std::size_t>(x)]) {
         const TetIndices& t = mesh.tets[static_cast<std::size_t>(e)];
         std::array<Index, 3> o{};
@@ -242,7 +244,8 @@ struct Collapser {
     for (const auto& [len, a, b] : shortlist) {
       const auto& sa = star[static_cast<std::size_t>(a)];
       if (sa.empty() || star[static_cast<std::size_t>(b)].empty()) continue;  // collapsed away
-      if (std::none_of(sa.begin(), sa.end(), [&](Index e) { return contains(mesh.tets[static_cast<std::size_t>(e)], b); }))
+      if (std::none_of(sa.begin(), sa.end(),
+                       [&](Index e) { return contains(mesh.tets[static_cast<std::size_t>(e)], b); }))
         continue;  // no longer an edge
       if (try_collapse(a, b) || try_collapse(b, a)) ++done;
     }

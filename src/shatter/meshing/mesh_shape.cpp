@@ -17,15 +17,14 @@ const char* to_string(MeshMethod method) {
 }
 
 Result<MeshMethod> parse_mesh_method(std::string_view name) {
-  for (MeshMethod m : {MeshMethod::automatic, MeshMethod::stuffing, MeshMethod::structured, MeshMethod::box_csg,
-                       MeshMethod::revolve})
+  for (MeshMethod m :
+       {MeshMethod::automatic, MeshMethod::stuffing, MeshMethod::structured, MeshMethod::box_csg, MeshMethod::revolve})
     if (name == to_string(m)) return m;
   return make_error("expected auto, stuffing, structured, box-csg or revolve, got \"" + std::string(name) + "\"");
 }
 
 Result<MeshShapeResult> mesh_shape(const Sdf& sdf, const MeshShapeDef& def, const std::string& name) {
-  if (def.segments < 0 || (def.segments > 0 && def.segments < 3))
-    return field_error("segments", "expected at least 3");
+  if (def.segments < 0 || (def.segments > 0 && def.segments < 3)) return field_error("segments", "expected at least 3");
   const bool is_box = box_csg_boxes(sdf).has_value();
   const bool is_revolve = revolved_shape(sdf).has_value();
   const MeshMethod m = def.method;
@@ -38,7 +37,9 @@ Result<MeshShapeResult> mesh_shape(const Sdf& sdf, const MeshShapeDef& def, cons
     case MeshMethod::box_csg:
     case MeshMethod::revolve:
     case MeshMethod::structured: {
-      const bool ok = m == MeshMethod::box_csg ? is_box : m == MeshMethod::revolve ? is_revolve : (is_box || is_revolve);
+      const bool ok = m == MeshMethod::box_csg   ? is_box
+                      : m == MeshMethod::revolve ? is_revolve
+                                                 : (is_box || is_revolve);
       if (!ok)
         return make_error((name.empty() ? std::string("shape") : name) + ": method " + std::string(to_string(m)) +
                           ": the shape is not " +
@@ -70,9 +71,8 @@ Result<MeshShapeResult> mesh_shape(const Sdf& sdf, const MeshShapeDef& def, cons
   return out;
 }
 
-std::optional<ReferenceVolume> reference_volume(const Sdf& sdf, const MeshShapeDef& def,
-                                                const MeshShapeResult& result, double mesh_volume, bool extrapolate,
-                                                Index max_tets) {
+std::optional<ReferenceVolume> reference_volume(const Sdf& sdf, const MeshShapeDef& def, const MeshShapeResult& result,
+                                                double mesh_volume, bool extrapolate, Index max_tets) {
   if (const std::optional<double> v = sdf.analytic_volume()) return ReferenceVolume{*v, "analytic"};
   if (result.exact_volume) return ReferenceVolume{*result.exact_volume, "exact"};
   if (!extrapolate || result.mesh.num_tets() > max_tets) return std::nullopt;

@@ -84,11 +84,16 @@ struct Sweep {
         const Index p = tri[static_cast<std::size_t>(e)], q = tri[static_cast<std::size_t>((e + 1) % 3)];
         const bool pa = points[p].x() == 0, qa = points[q].x() == 0;
         if (pa && qa) continue;
-        const bool pf = !pa && level[static_cast<std::size_t>(p)] == kmin, qf = !qa && level[static_cast<std::size_t>(q)] == kmin;
-        if (pa || qa) tris += (pa ? qf : pf) ? 2 : 1;
-        else if (pf && qf) tris += 4;
-        else if (!pf && !qf) tris += 2;
-        else tris += 3;
+        const bool pf = !pa && level[static_cast<std::size_t>(p)] == kmin,
+                   qf = !qa && level[static_cast<std::size_t>(q)] == kmin;
+        if (pa || qa)
+          tris += (pa ? qf : pf) ? 2 : 1;
+        else if (pf && qf)
+          tris += 4;
+        else if (!pf && !qf)
+          tris += 2;
+        else
+          tris += 3;
       }
       t += steps / 2 * (tris - 4);
     }
@@ -108,7 +113,9 @@ std::vector<int> angular_levels(const Sweep& s, double h, int max_level, int min
     if (r == 0) continue;
     const double want = std::max<double>(min_segments, 2.0 * std::numbers::pi * r / h);
     int k = 0;
-    while (k < max_level && static_cast<double>(s.segments >> (k + 1)) >= want && (s.segments >> (k + 1)) >= min_segments) ++k;
+    while (k < max_level && static_cast<double>(s.segments >> (k + 1)) >= want &&
+           (s.segments >> (k + 1)) >= min_segments)
+      ++k;
     level[static_cast<std::size_t>(i)] = k;
   }
   // Neighbouring off-axis points differ by at most one level: lower (refine) the coarser one.
@@ -120,8 +127,14 @@ std::vector<int> angular_levels(const Sweep& s, double h, int max_level, int min
         if (s.points[static_cast<std::size_t>(u)].x() == 0 || s.points[static_cast<std::size_t>(v)].x() == 0) continue;
         int& ku = level[static_cast<std::size_t>(u)];
         int& kv = level[static_cast<std::size_t>(v)];
-        if (ku > kv + 1) { ku = kv + 1; changed = true; }
-        if (kv > ku + 1) { kv = ku + 1; changed = true; }
+        if (ku > kv + 1) {
+          ku = kv + 1;
+          changed = true;
+        }
+        if (kv > ku + 1) {
+          kv = ku + 1;
+          changed = true;
+        }
       }
   }
   return level;
@@ -167,8 +180,10 @@ bool sweep_with_levels(const Sweep& s, const std::vector<int>& level, TetMesh& m
   auto quad = [](std::vector<Tri>& f, Index a, Index b, Index c, Index d) {  // a b c d in cycle order
     const std::array<Index, 4> q{a, b, c, d};
     const int j = static_cast<int>(std::min_element(q.begin(), q.end()) - q.begin());
-    f.push_back({q[static_cast<std::size_t>(j)], q[static_cast<std::size_t>((j + 1) % 4)], q[static_cast<std::size_t>((j + 2) % 4)]});
-    f.push_back({q[static_cast<std::size_t>(j)], q[static_cast<std::size_t>((j + 2) % 4)], q[static_cast<std::size_t>((j + 3) % 4)]});
+    f.push_back({q[static_cast<std::size_t>(j)], q[static_cast<std::size_t>((j + 1) % 4)],
+                 q[static_cast<std::size_t>((j + 2) % 4)]});
+    f.push_back({q[static_cast<std::size_t>(j)], q[static_cast<std::size_t>((j + 2) % 4)],
+                 q[static_cast<std::size_t>((j + 3) % 4)]});
   };
   for (const auto& tri : s.triangles) {
     int kmin = 1 << 20;
@@ -189,8 +204,10 @@ bool sweep_with_levels(const Sweep& s, const std::vector<int>& level, TetMesh& m
         const Index apex = v[static_cast<std::size_t>(m0)];
         const int c1 = (col + 1) % 3, c2 = (col + 2) % 3;
         std::vector<Tri> faces;
-        quad(faces, v[static_cast<std::size_t>(c1)], v[static_cast<std::size_t>(c2)], v[static_cast<std::size_t>(c2 + 3)], v[static_cast<std::size_t>(c1 + 3)]);
-        faces.push_back({v[static_cast<std::size_t>(3 * (1 - lev))], v[static_cast<std::size_t>(3 * (1 - lev) + 1)], v[static_cast<std::size_t>(3 * (1 - lev) + 2)]});
+        quad(faces, v[static_cast<std::size_t>(c1)], v[static_cast<std::size_t>(c2)],
+             v[static_cast<std::size_t>(c2 + 3)], v[static_cast<std::size_t>(c1 + 3)]);
+        faces.push_back({v[static_cast<std::size_t>(3 * (1 - lev))], v[static_cast<std::size_t>(3 * (1 - lev) + 1)],
+                         v[static_cast<std::size_t>(3 * (1 - lev) + 2)]});
         for (const auto& f : faces) {
           TetIndices t{apex, f[0], f[1], f[2]};
           if (t[0] == t[1] || t[0] == t[2] || t[0] == t[3] || t[1] == t[2] || t[1] == t[3] || t[2] == t[3]) continue;
@@ -210,7 +227,8 @@ bool sweep_with_levels(const Sweep& s, const std::vector<int>& level, TetMesh& m
         Index p = tri[static_cast<std::size_t>(e)], q = tri[static_cast<std::size_t>((e + 1) % 3)];
         const bool pa = on_axis(p), qa = on_axis(q);
         if (pa && qa) continue;
-        const bool pf = !pa && level[static_cast<std::size_t>(p)] == kmin, qf = !qa && level[static_cast<std::size_t>(q)] == kmin;
+        const bool pf = !pa && level[static_cast<std::size_t>(p)] == kmin,
+                   qf = !qa && level[static_cast<std::size_t>(q)] == kmin;
         if (pa || qa) {  // fan from the axis point over the other point's ring
           const Index ax = pa ? node(p, 0) : node(q, 0);
           const Index o = pa ? q : p;
@@ -244,8 +262,10 @@ bool sweep_with_levels(const Sweep& s, const std::vector<int>& level, TetMesh& m
       std::vector<std::vector<Tri>> face_tris;
       for (const auto& f : faces) {
         std::vector<Tri> t;
-        if (f.size() == 3) t.push_back({f[0], f[1], f[2]});
-        else quad(t, f[0], f[1], f[2], f[3]);
+        if (f.size() == 3)
+          t.push_back({f[0], f[1], f[2]});
+        else
+          quad(t, f[0], f[1], f[2], f[3]);
         for (auto& x : t) {
           const Vec3 a = m.positions[static_cast<std::size_t>(x[0])], b = m.positions[static_cast<std::size_t>(x[1])],
                      c = m.positions[static_cast<std::size_t>(x[2])];
@@ -266,7 +286,8 @@ bool sweep_with_levels(const Sweep& s, const std::vector<int>& level, TetMesh& m
             // A quadrilateral holding the apex keeps its split only if the diagonal ends there.
             if (f4.size() == 4) {
               const int j = static_cast<int>(std::min_element(f4.begin(), f4.end()) - f4.begin());
-              if (apex != f4[static_cast<std::size_t>(j)] && apex != f4[static_cast<std::size_t>((j + 2) % 4)]) ok = false;
+              if (apex != f4[static_cast<std::size_t>(j)] && apex != f4[static_cast<std::size_t>((j + 2) % 4)])
+                ok = false;
             }
             continue;
           }
@@ -292,8 +313,11 @@ bool sweep_with_levels(const Sweep& s, const std::vector<int>& level, TetMesh& m
       // keeping the shared splits, or when it gives the better worst tet.
       Vec3 mid = Vec3::Zero();
       for (Index v : tri) {
-        if (on_axis(v) || level[static_cast<std::size_t>(v)] == kmin) mid += m.positions[static_cast<std::size_t>(node(v, J1))];
-        else mid += 0.5 * (m.positions[static_cast<std::size_t>(node(v, J))] + m.positions[static_cast<std::size_t>(node(v, J2))]);
+        if (on_axis(v) || level[static_cast<std::size_t>(v)] == kmin)
+          mid += m.positions[static_cast<std::size_t>(node(v, J1))];
+        else
+          mid += 0.5 * (m.positions[static_cast<std::size_t>(node(v, J))] +
+                        m.positions[static_cast<std::size_t>(node(v, J2))]);
       }
       mid /= 3.0;
       double mid_worst = std::numeric_limits<double>::infinity();
@@ -493,11 +517,13 @@ Result<TetMesh> mesh_revolution(const Sdf& sdf, const RevolveDef& def, RevolveRe
     c.points = static_cast<Index>(sw.points.size());
     c.triangles = static_cast<Index>(sw.triangles.size());
     std::vector<Index> base;
-    if (!sweep_with_levels(sw, sw.level, c.mesh, base)) return make_error("revolve mesher: a two-level polytope could not be filled");
+    if (!sweep_with_levels(sw, sw.level, c.mesh, base))
+      return make_error("revolve mesher: a two-level polytope could not be filled");
     TetMesh& m = c.mesh;
     for (Vec3& p : m.positions) p = xf.translation + xf.rotation * (xf.scale * p);
     for (TetIndices& t : m.tets)
-      if (signed_volume(m.positions[t[0]], m.positions[t[1]], m.positions[t[2]], m.positions[t[3]]) < 0) std::swap(t[2], t[3]);
+      if (signed_volume(m.positions[t[0]], m.positions[t[1]], m.positions[t[2]], m.positions[t[3]]) < 0)
+        std::swap(t[2], t[3]);
     c.min_angle = mesh_quality(m).min_dihedral_deg;
     return c;
   };
@@ -512,7 +538,8 @@ Result<TetMesh> mesh_revolution(const Sdf& sdf, const RevolveDef& def, RevolveRe
   const Index nseg = chosen.segments;
   const ValidationReport v = validate_mesh(m);
   if (v.has_errors())
-    return make_error("revolve mesher: invalid mesh (" + (v.problems.empty() ? std::string() : v.problems[0].message) + ")");
+    return make_error("revolve mesher: invalid mesh (" + (v.problems.empty() ? std::string() : v.problems[0].message) +
+                      ")");
   if (report) {
     report->edge_length = h;
     report->segments = static_cast<int>(nseg);

@@ -13,9 +13,9 @@ namespace shatter {
 
 struct Sdf::Node {
   Kind kind = Kind::sphere;
-  Vec3 v = Vec3::Zero();        ///< box half extents, ellipsoid radii
-  double a = 0, b = 0;          ///< radius / half height / major / minor / k / half depth
-  std::vector<Vec2> polygon;    ///< revolution profile (r, y) or extrusion polygon (x, y)
+  Vec3 v = Vec3::Zero();      ///< box half extents, ellipsoid radii
+  double a = 0, b = 0;        ///< radius / half height / major / minor / k / half depth
+  std::vector<Vec2> polygon;  ///< revolution profile (r, y) or extrusion polygon (x, y)
   std::shared_ptr<const SurfaceDistance> surface;
   std::vector<Sdf> children;
   Vec3 translation = Vec3::Zero();
@@ -78,24 +78,20 @@ double polygon_signed_distance(const std::vector<Vec2>& v, const Vec2& p) {
 
 double polygon_area(const std::vector<Vec2>& v) {
   double a = 0;
-  for (std::size_t i = 0, j = v.size() - 1; i < v.size(); j = i, ++i)
-    a += v[j].x() * v[i].y() - v[i].x() * v[j].y();
+  for (std::size_t i = 0, j = v.size() - 1; i < v.size(); j = i, ++i) a += v[j].x() * v[i].y() - v[i].x() * v[j].y();
   return 0.5 * a;
 }
 
 Result<void> check_polygon(const std::vector<Vec2>& polygon, bool revolution, const std::string& field) {
   if (polygon.size() < 3)
-    return field_error(field, "expected a closed polygon of at least 3 points, got " +
-                                  std::to_string(polygon.size()));
+    return field_error(field, "expected a closed polygon of at least 3 points, got " + std::to_string(polygon.size()));
   for (std::size_t i = 0; i < polygon.size(); ++i) {
     if (!polygon[i].allFinite())
       return field_error(field + "[" + std::to_string(i) + "]", "expected finite coordinates");
     if (revolution && polygon[i].x() < 0)
-      return field_error(field + "[" + std::to_string(i) + "]",
-                         "expected radius r >= 0 (profile points are (r, y))");
+      return field_error(field + "[" + std::to_string(i) + "]", "expected radius r >= 0 (profile points are (r, y))");
   }
-  if (!(std::abs(polygon_area(polygon)) > 0))
-    return field_error(field, "expected a polygon with non-zero area");
+  if (!(std::abs(polygon_area(polygon)) > 0)) return field_error(field, "expected a polygon with non-zero area");
   return {};
 }
 
@@ -214,8 +210,7 @@ double Sdf::operator()(const Vec3& p) const {
   if (!node_) return kInf;
   const Node& n = *node_;
   switch (n.kind) {
-    case Kind::sphere:
-      return p.norm() - n.a;
+    case Kind::sphere: return p.norm() - n.a;
     case Kind::box: {
       const Vec3 q = p.cwiseAbs() - n.v;
       return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
@@ -230,10 +225,8 @@ double Sdf::operator()(const Vec3& p) const {
       return q.norm() - n.a;
     }
     case Kind::cone:
-    case Kind::revolution:
-      return polygon_signed_distance(n.polygon, Vec2(std::hypot(p.x(), p.z()), p.y()));
-    case Kind::torus:
-      return std::hypot(std::hypot(p.x(), p.z()) - n.a, p.y()) - n.b;
+    case Kind::revolution: return polygon_signed_distance(n.polygon, Vec2(std::hypot(p.x(), p.z()), p.y()));
+    case Kind::torus: return std::hypot(std::hypot(p.x(), p.z()) - n.a, p.y()) - n.b;
     case Kind::ellipsoid: {
       // Quilez: k0 (k0 - 1) / k1 with k0 = |p / r|, k1 = |p / r^2|.
       const double k0 = p.cwiseQuotient(n.v).norm();
@@ -243,8 +236,7 @@ double Sdf::operator()(const Vec3& p) const {
     }
     case Kind::extrusion:
       return op_extrude(polygon_signed_distance(n.polygon, Vec2(p.x(), p.y())), std::abs(p.z()) - n.a);
-    case Kind::surface:
-      return n.surface->signed_distance(p);
+    case Kind::surface: return n.surface->signed_distance(p);
     case Kind::unite: {
       double d = kInf;
       for (const Sdf& c : n.children) d = std::min(d, c(p));
@@ -319,8 +311,7 @@ Aabb Sdf::bounds() const {
         b.extend(Vec3(q.x(), q.y(), n.a));
       }
       return b;
-    case Kind::surface:
-      return n.surface->bounds();
+    case Kind::surface: return n.surface->bounds();
     case Kind::unite:
     case Kind::smooth_unite:
       for (const Sdf& c : n.children) {
@@ -344,10 +335,8 @@ Aabb Sdf::bounds() const {
         b.max = b.max.cwiseMin(cb.max);
       }
       return b;
-    case Kind::subtract:
-      return n.children.empty() ? b : n.children[0].bounds();
-    case Kind::transform:
-      return transform_box(n.children[0].bounds(), n.translation, n.rotation, n.scale);
+    case Kind::subtract: return n.children.empty() ? b : n.children[0].bounds();
+    case Kind::transform: return transform_box(n.children[0].bounds(), n.translation, n.rotation, n.scale);
   }
   return b;
 }

@@ -105,7 +105,7 @@ Result<Sdf> node(const Json& j, const Where& where, const ShapeJsonOptions& opti
   } else if (type == "cylinder" || type == "capsule" || type == "cone") {
     SHATTER_TRY(radius, positive(r, "radius"));
     SHATTER_TRY(height, positive(r, "height"));
-    s = type == "cylinder" ? Sdf::cylinder(*radius, 0.5 * *height)
+    s = type == "cylinder"  ? Sdf::cylinder(*radius, 0.5 * *height)
         : type == "capsule" ? Sdf::capsule(*radius, 0.5 * *height)
                             : Sdf::cone(*radius, *height);
   } else if (type == "torus") {
@@ -136,9 +136,12 @@ Result<Sdf> node(const Json& j, const Where& where, const ShapeJsonOptions& opti
       SHATTER_TRY(child, node((**arr)[i], wc.index(i), options));
       children.push_back(std::move(*child));
     }
-    if (type == "union") s = Sdf::unite(std::move(children));
-    else if (type == "difference") s = Sdf::subtract(std::move(children));
-    else if (type == "intersection") s = Sdf::intersect(std::move(children));
+    if (type == "union")
+      s = Sdf::unite(std::move(children));
+    else if (type == "difference")
+      s = Sdf::subtract(std::move(children));
+    else if (type == "intersection")
+      s = Sdf::intersect(std::move(children));
     else {
       SHATTER_TRY(blend, positive(r, "blend"));
       s = Sdf::smooth_unite(std::move(children), *blend);

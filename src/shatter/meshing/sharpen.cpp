@@ -51,7 +51,7 @@ struct Sharpener {
   double cos_max = std::cos(def.max_dihedral_deg * std::numbers::pi / 180.0);
   // Compressed rows, for boundary nodes only (slot b of boundary_nodes[b]): the tets around
   // each boundary node and its boundary triangles.
-  std::vector<Index> boundary_nodes, slot;      // slot: node -> row, or -1
+  std::vector<Index> boundary_nodes, slot;  // slot: node -> row, or -1
   std::vector<std::int64_t> star_start, ring_start;
   std::vector<Index> star_tets;
   std::vector<TriIndices> ring_tris;
@@ -67,14 +67,16 @@ struct Sharpener {
     std::vector<std::int64_t> count(nb + 1, 0);
     for (const TetIndices& t : mesh.tets)
       for (Index v : t)
-        if (slot[static_cast<std::size_t>(v)] >= 0) ++count[static_cast<std::size_t>(slot[static_cast<std::size_t>(v)]) + 1];
+        if (slot[static_cast<std::size_t>(v)] >= 0)
+          ++count[static_cast<std::size_t>(slot[static_cast<std::size_t>(v)]) + 1];
     star_start.assign(nb + 1, 0);
     for (std::size_t i = 0; i < nb; ++i) star_start[i + 1] = star_start[i] + count[i + 1];
     star_tets.resize(static_cast<std::size_t>(star_start[nb]));
     std::vector<std::int64_t> fill(star_start.begin(), star_start.end() - 1);
     for (Index e = 0; e < mesh.num_tets(); ++e)
       for (Index v : mesh.tets[static_cast<std::size_t>(e)])
-        if (const Index r = slot[static_cast<std::size_t>(v)]; r >= 0) star_tets[static_cast<std::size_t>(fill[static_cast<std::size_t>(r)]++)] = e;
+        if (const Index r = slot[static_cast<std::size_t>(v)]; r >= 0)
+          star_tets[static_cast<std::size_t>(fill[static_cast<std::size_t>(r)]++)] = e;
     std::fill(count.begin(), count.end(), 0);
     for (const TriIndices& t : s.triangles)
       for (int k = 0; k < 3; ++k) ++count[static_cast<std::size_t>(t[k]) + 1];
@@ -107,8 +109,9 @@ struct Sharpener {
     {
       std::vector<Vec3> tn;
       for (const TriIndices& t : ring(v)) {
-        const Vec3 n = (mesh.positions[static_cast<std::size_t>(t[1])] - mesh.positions[static_cast<std::size_t>(t[0])])
-                           .cross(mesh.positions[static_cast<std::size_t>(t[2])] - mesh.positions[static_cast<std::size_t>(t[0])]);
+        const Vec3 n =
+            (mesh.positions[static_cast<std::size_t>(t[1])] - mesh.positions[static_cast<std::size_t>(t[0])])
+                .cross(mesh.positions[static_cast<std::size_t>(t[2])] - mesh.positions[static_cast<std::size_t>(t[0])]);
         if (n.norm() > 0) tn.push_back(n.normalized());
       }
       bool spread = false;
@@ -191,10 +194,14 @@ Result<SharpenReport> sharpen_features(TetMesh& mesh, const Sdf& sdf, const Shar
     // Targets from the current positions (in parallel) for the nodes whose surroundings changed
     // (all on the first pass), then moves in node order (sequential, each checked against the
     // positions the earlier moves left).
-    parallel_for(0, static_cast<std::int64_t>(nb), [&](std::int64_t i) {
-      const Index v = s.boundary_nodes[static_cast<std::size_t>(i)];
-      targets[static_cast<std::size_t>(i)] = dirty[static_cast<std::size_t>(i)] ? s.target(v) : mesh.positions[static_cast<std::size_t>(v)];
-    }, 16);
+    parallel_for(
+        0, static_cast<std::int64_t>(nb),
+        [&](std::int64_t i) {
+          const Index v = s.boundary_nodes[static_cast<std::size_t>(i)];
+          targets[static_cast<std::size_t>(i)] =
+              dirty[static_cast<std::size_t>(i)] ? s.target(v) : mesh.positions[static_cast<std::size_t>(v)];
+        },
+        16);
     std::fill(next.begin(), next.end(), 0);
     Index moved = 0;
     for (std::size_t i = 0; i < nb; ++i) {

@@ -20,10 +20,10 @@
 namespace shatter {
 
 struct SharpenDef {
-  double edge_length = 0;             ///< the mesh's edge length h, m (> 0): scale of every tolerance
-  double min_dihedral_deg = 0;        ///< every tet around a moved node keeps its angles in here
+  double edge_length = 0;       ///< the mesh's edge length h, m (> 0): scale of every tolerance
+  double min_dihedral_deg = 0;  ///< every tet around a moved node keeps its angles in here
   double max_dihedral_deg = 180;
-  double crease_angle_deg = 25;       ///< samples' normals must spread wider than this
+  double crease_angle_deg = 25;  ///< samples' normals must spread wider than this
   int passes = 3;
 };
 

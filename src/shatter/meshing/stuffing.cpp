@@ -16,10 +16,10 @@
 
 #include "shatter/core/parallel.h"
 #include "shatter/mesh/topology.h"
+#include "shatter/mesh/validate.h"
 #include "shatter/meshing/coarsen.h"
 #include "shatter/meshing/sharpen.h"
 #include "shatter/meshing/stuffing_stencil.h"
-#include "shatter/mesh/validate.h"
 
 namespace shatter {
 namespace {
@@ -90,11 +90,11 @@ struct Stuffer {
   const Sdf& sdf;
   const StuffingDef& def;
   Lattice lat;
-  std::int64_t nl = 0;                 // lattice points
-  std::vector<double> value;           // sdf at lattice points (#nl)
-  std::vector<double> cut_t;           // cut parameter from owner, or -1 (#nl x kSlots)
-  std::vector<std::uint8_t> warped;    // (#nl)
-  std::vector<Vec3> pos;               // lattice positions after warping (#nl)
+  std::int64_t nl = 0;               // lattice points
+  std::vector<double> value;         // sdf at lattice points (#nl)
+  std::vector<double> cut_t;         // cut parameter from owner, or -1 (#nl x kSlots)
+  std::vector<std::uint8_t> warped;  // (#nl)
+  std::vector<Vec3> pos;             // lattice positions after warping (#nl)
 
   [[nodiscard]] Key cut_key(const IVec3& p, const IVec3& q) const {
     const Slot s = edge_slot(p, q - p);
@@ -145,23 +145,27 @@ struct Stuffer {
 
   void evaluate() {
     value.assign(static_cast<std::size_t>(nl), 0.0);
-    parallel_for(0, nl, [&](std::int64_t i) { value[static_cast<std::size_t>(i)] = sdf(lat.position(lat.coord(i))); }, 256);
+    parallel_for(
+        0, nl, [&](std::int64_t i) { value[static_cast<std::size_t>(i)] = sdf(lat.position(lat.coord(i))); }, 256);
   }
 
   void cut_points() {
     cut_t.assign(static_cast<std::size_t>(nl * kSlots), -1.0);
-    parallel_for(0, nl, [&](std::int64_t i) {
-      const IVec3 p = lat.coord(i);
-      const double fp = value[static_cast<std::size_t>(i)];
-      const bool red = (p.x() & 1) != 0;
-      for (int s = 0; s < (red ? kSlots : 3); ++s) {
-        const IVec3 q = p + (s < 3 ? direction(s) : direction(6 + s - 3));
-        if (!lat.valid(q)) continue;
-        const double fq = value[static_cast<std::size_t>(lat.id(q))];
-        if (!((fp < 0 && fq > 0) || (fp > 0 && fq < 0))) continue;
-        cut_t[static_cast<std::size_t>(i * kSlots + s)] = root(lat.position(p), lat.position(q), fp, fq);
-      }
-    }, 256);
+    parallel_for(
+        0, nl,
+        [&](std::int64_t i) {
+          const IVec3 p = lat.coord(i);
+          const double fp = value[static_cast<std::size_t>(i)];
+          const bool red = (p.x() & 1) != 0;
+          for (int s = 0; s < (red ? kSlots : 3); ++s) {
+            const IVec3 q = p + (s < 3 ? direction(s) : direction(6 + s - 3));
+            if (!lat.valid(q)) continue;
+            const double fq = value[static_cast<std::size_t>(lat.id(q))];
+            if (!((fp < 0 && fq > 0) || (fp > 0 && fq < 0))) continue;
+            cut_t[static_cast<std::size_t>(i * kSlots + s)] = root(lat.position(p), lat.position(q), fp, fq);
+          }
+        },
+        256);
   }
 
   // A lattice point within alpha * edge length of a cut point on one of its edges is warped onto
@@ -169,29 +173,32 @@ struct Stuffer {
   void warp() {
     warped.assign(static_cast<std::size_t>(nl), 0);
     pos.resize(static_cast<std::size_t>(nl));
-    parallel_for(0, nl, [&](std::int64_t i) {
-      const IVec3 p = lat.coord(i);
-      const Vec3 x = lat.position(p);
-      double best = std::numeric_limits<double>::infinity();
-      Vec3 target = x;
-      for (int d = 0; d < 14; ++d) {
-        const IVec3 q = p + direction(d);
-        if (!lat.valid(q)) continue;
-        const Slot s = edge_slot(p, q - p);
-        const double t = cut_t[static_cast<std::size_t>(lat.id(s.owner) * kSlots + s.slot)];
-        if (t < 0) continue;
-        const double frac = s.owner == p ? t : 1.0 - t;
-        const bool is_long = d < 6;
-        const double alpha = is_long ? def.alpha_long : def.alpha_short;
-        const double length = is_long ? lat.h : lat.h * std::sqrt(3.0) * 0.5;
-        if (frac < alpha && frac * length < best) {
-          best = frac * length;
-          target = x + frac * (lat.position(q) - x);
-        }
-      }
-      warped[static_cast<std::size_t>(i)] = std::isfinite(best) ? 1 : 0;
-      pos[static_cast<std::size_t>(i)] = target;
-    }, 256);
+    parallel_for(
+        0, nl,
+        [&](std::int64_t i) {
+          const IVec3 p = lat.coord(i);
+          const Vec3 x = lat.position(p);
+          double best = std::numeric_limits<double>::infinity();
+          Vec3 target = x;
+          for (int d = 0; d < 14; ++d) {
+            const IVec3 q = p + direction(d);
+            if (!lat.valid(q)) continue;
+            const Slot s = edge_slot(p, q - p);
+            const double t = cut_t[static_cast<std::size_t>(lat.id(s.owner) * kSlots + s.slot)];
+            if (t < 0) continue;
+            const double frac = s.owner == p ? t : 1.0 - t;
+            const bool is_long = d < 6;
+            const double alpha = is_long ? def.alpha_long : def.alpha_short;
+            const double length = is_long ? lat.h : lat.h * std::sqrt(3.0) * 0.5;
+            if (frac < alpha && frac * length < best) {
+              best = frac * length;
+              target = x + frac * (lat.position(q) - x);
+            }
+          }
+          warped[static_cast<std::size_t>(i)] = std::isfinite(best) ? 1 : 0;
+          pos[static_cast<std::size_t>(i)] = target;
+        },
+        256);
   }
 
   // Fill one BCC tet (vertices: black long edge p[0]-p[1], red long edge p[2]-p[3]) from the
@@ -216,7 +223,8 @@ struct Stuffer {
       out.push_back({key[0], key[1], key[2], key[3]});
       return;
     }
-    for (int i = 0; i < 4; ++i) in.x[static_cast<std::size_t>(i)] = pos[static_cast<std::size_t>(key[static_cast<std::size_t>(i)])];
+    for (int i = 0; i < 4; ++i)
+      in.x[static_cast<std::size_t>(i)] = pos[static_cast<std::size_t>(key[static_cast<std::size_t>(i)])];
     for (int e = 0; e < 6; ++e) {
       const int i = stuffing::kStencilEdges[e][0], j = stuffing::kStencilEdges[e][1];
       if (in.sign[static_cast<std::size_t>(i)] * in.sign[static_cast<std::size_t>(j)] >= 0) continue;
@@ -248,28 +256,31 @@ struct Stuffer {
   std::vector<std::array<Key, 4>> tets() const {
     const int slabs = lat.n.z() + 1;
     std::vector<std::vector<std::array<Key, 4>>> per_slab(static_cast<std::size_t>(slabs));
-    parallel_for(0, slabs, [&](std::int64_t kz) {
-      auto& out = per_slab[static_cast<std::size_t>(kz)];
-      for (int jy = 0; jy <= lat.n.y(); ++jy)
-        for (int ix = 0; ix <= lat.n.x(); ++ix) {
-          const IVec3 b(2 * ix, 2 * jy, 2 * static_cast<int>(kz));
-          for (int a = 0; a < 3; ++a) {
-            IVec3 ea = IVec3::Zero();
-            ea[a] = 1;
-            if (!lat.valid(b + 2 * ea)) continue;
-            IVec3 eb = IVec3::Zero(), ec = IVec3::Zero();
-            eb[(a + 1) % 3] = 1;
-            ec[(a + 2) % 3] = 1;
-            static constexpr int kRing[4][2] = {{1, 1}, {-1, 1}, {-1, -1}, {1, -1}};
-            for (int q = 0; q < 4; ++q) {
-              const IVec3 r1 = b + ea + kRing[q][0] * eb + kRing[q][1] * ec;
-              const IVec3 r2 = b + ea + kRing[(q + 1) % 4][0] * eb + kRing[(q + 1) % 4][1] * ec;
-              if (!lat.valid(r1) || !lat.valid(r2)) continue;
-              clip_tet({b, b + 2 * ea, r1, r2}, out);
+    parallel_for(
+        0, slabs,
+        [&](std::int64_t kz) {
+          auto& out = per_slab[static_cast<std::size_t>(kz)];
+          for (int jy = 0; jy <= lat.n.y(); ++jy)
+            for (int ix = 0; ix <= lat.n.x(); ++ix) {
+              const IVec3 b(2 * ix, 2 * jy, 2 * static_cast<int>(kz));
+              for (int a = 0; a < 3; ++a) {
+                IVec3 ea = IVec3::Zero();
+                ea[a] = 1;
+                if (!lat.valid(b + 2 * ea)) continue;
+                IVec3 eb = IVec3::Zero(), ec = IVec3::Zero();
+                eb[(a + 1) % 3] = 1;
+                ec[(a + 2) % 3] = 1;
+                static constexpr int kRing[4][2] = {{1, 1}, {-1, 1}, {-1, -1}, {1, -1}};
+                for (int q = 0; q < 4; ++q) {
+                  const IVec3 r1 = b + ea + kRing[q][0] * eb + kRing[q][1] * ec;
+                  const IVec3 r2 = b + ea + kRing[(q + 1) % 4][0] * eb + kRing[(q + 1) % 4][1] * ec;
+                  if (!lat.valid(r1) || !lat.valid(r2)) continue;
+                  clip_tet({b, b + 2 * ea, r1, r2}, out);
+                }
+              }
             }
-          }
-        }
-    }, 2);
+        },
+        2);
     std::vector<std::array<Key, 4>> all;
     std::size_t total = 0;
     for (const auto& v : per_slab) total += v.size();
@@ -297,7 +308,8 @@ Result<TetMesh> stuff_once(const Sdf& sdf, const StuffingDef& def, double h, Stu
   if (!(2 * count <= static_cast<double>(def.max_lattice_vertices)))
     return field_error("edge_length", "edge length " + std::to_string(h) + " m needs a lattice of about " +
                                           std::to_string(2 * count) + " points (limit " +
-                                          std::to_string(def.max_lattice_vertices) + "): expected a larger edge length");
+                                          std::to_string(def.max_lattice_vertices) +
+                                          "): expected a larger edge length");
   lat.origin = 0.5 * (box.min + box.max) - 0.5 * h * lat.n.cast<double>();
   lat.nb = std::int64_t(lat.n.x() + 1) * (lat.n.y() + 1) * (lat.n.z() + 1);
   lat.nr = std::int64_t(lat.n.x()) * lat.n.y() * lat.n.z();
@@ -332,7 +344,8 @@ Result<TetMesh> stuff_once(const Sdf& sdf, const StuffingDef& def, double h, Stu
   parallel_for(0, static_cast<std::int64_t>(key_tets.size()), [&](std::int64_t e) {
     TetIndices t;
     for (int c = 0; c < 4; ++c) t[c] = node_of[static_cast<std::size_t>(key_tets[static_cast<std::size_t>(e)][c])];
-    const double v = signed_volume(mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]], mesh.positions[t[3]]);
+    const double v =
+        signed_volume(mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]], mesh.positions[t[3]]);
     if (v < 0) std::swap(t[2], t[3]);
     mesh.tets[static_cast<std::size_t>(e)] = t;
   });
@@ -342,7 +355,8 @@ Result<TetMesh> stuff_once(const Sdf& sdf, const StuffingDef& def, double h, Stu
   const double max_changed = std::min(kStuffingMaxDihedralDeg, def.changed_max_dihedral_deg);
   std::int64_t sharpened = 0;
   if (def.sharpen) {
-    auto r = sharpen_features(mesh, sdf, {.edge_length = h, .min_dihedral_deg = min_changed, .max_dihedral_deg = max_changed});
+    auto r = sharpen_features(mesh, sdf,
+                              {.edge_length = h, .min_dihedral_deg = min_changed, .max_dihedral_deg = max_changed});
     if (!r) return std::move(r.error());
     sharpened = r->moved;
   }
@@ -381,7 +395,8 @@ Result<TetMesh> stuff_tets(const Sdf& sdf, const StuffingDef& def, StuffingRepor
   if (sdf.empty()) return field_error("shape", "no shape given");
   // A cut point within alpha of both ends would warp both onto it (alpha >= 0.5).
   if (!(def.alpha_long > 0 && def.alpha_long < 0.5)) return field_error("alpha_long", "expected a number in (0, 0.5)");
-  if (!(def.alpha_short > 0 && def.alpha_short < 0.5)) return field_error("alpha_short", "expected a number in (0, 0.5)");
+  if (!(def.alpha_short > 0 && def.alpha_short < 0.5))
+    return field_error("alpha_short", "expected a number in (0, 0.5)");
   if (!(def.grading >= 0) || !std::isfinite(def.grading)) return field_error("grading", "expected a number >= 0");
   if (!(def.max_size_ratio >= 1) || !std::isfinite(def.max_size_ratio))
     return field_error("max_size_ratio", "expected a number >= 1");

@@ -80,9 +80,12 @@ StencilOutput fill_stencil(const StencilInput& in) {
   StencilOutput out;
   int neg[4], zer[4], pos[4], nn = 0, nz = 0, np = 0;
   for (int i = 0; i < 4; ++i) {
-    if (in.sign[static_cast<std::size_t>(i)] < 0) neg[nn++] = i;
-    else if (in.sign[static_cast<std::size_t>(i)] > 0) pos[np++] = i;
-    else zer[nz++] = i;
+    if (in.sign[static_cast<std::size_t>(i)] < 0)
+      neg[nn++] = i;
+    else if (in.sign[static_cast<std::size_t>(i)] > 0)
+      pos[np++] = i;
+    else
+      zer[nz++] = i;
   }
   if (nn == 0) return out;
   if (np == 0) {
@@ -91,9 +94,12 @@ StencilOutput fill_stencil(const StencilInput& in) {
   }
   if (nn == 1) {
     const int a = neg[0];
-    if (np == 3) emit(out, a, cut_point(a, pos[0]), cut_point(a, pos[1]), cut_point(a, pos[2]));
-    else if (np == 2) emit(out, a, zer[0], cut_point(a, pos[0]), cut_point(a, pos[1]));
-    else emit(out, a, zer[0], zer[1], cut_point(a, pos[0]));
+    if (np == 3)
+      emit(out, a, cut_point(a, pos[0]), cut_point(a, pos[1]), cut_point(a, pos[2]));
+    else if (np == 2)
+      emit(out, a, zer[0], cut_point(a, pos[0]), cut_point(a, pos[1]));
+    else
+      emit(out, a, zer[0], zer[1], cut_point(a, pos[0]));
     return out;
   }
   if (nn == 2 && nz == 1) {  // pyramid: apex the zero, base the quadrilateral on face (a, b, p)
@@ -132,7 +138,10 @@ StencilOutput fill_stencil(const StencilInput& in) {
   const std::array<int, 3> t0{neg[0], neg[1], neg[2]};
   const std::array<int, 3> t1{cut_point(neg[0], p), cut_point(neg[1], p), cut_point(neg[2], p)};
   std::array<bool, 3> diag{};
-  for (int i = 0; i < 3; ++i) diag[static_cast<std::size_t>(i)] = quad_pivot(in, t0[static_cast<std::size_t>(i)], t0[static_cast<std::size_t>((i + 1) % 3)], p) == t0[static_cast<std::size_t>(i)];
+  for (int i = 0; i < 3; ++i)
+    diag[static_cast<std::size_t>(i)] =
+        quad_pivot(in, t0[static_cast<std::size_t>(i)], t0[static_cast<std::size_t>((i + 1) % 3)], p) ==
+        t0[static_cast<std::size_t>(i)];
   // Never cyclic: the inside vertex L on the long edge to p is the pivot of neither face through
   // L-p (both pivot on the short-edge vertex), so the three pivots cannot all differ.
   fill_prism(t0, t1, diag, out);

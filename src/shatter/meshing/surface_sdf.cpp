@@ -118,8 +118,8 @@ Result<std::shared_ptr<const SurfaceDistance>> SurfaceDistance::create(const Tri
     const TriIndices& t = surface.triangles[f];
     for (Index k : t)
       if (k < 0 || k >= nv)
-        return file_error(name, "triangle " + std::to_string(f + 1) + " refers to vertex " +
-                                    std::to_string(k + 1) + " of " + std::to_string(nv));
+        return file_error(name, "triangle " + std::to_string(f + 1) + " refers to vertex " + std::to_string(k + 1) +
+                                    " of " + std::to_string(nv));
     const Vec3 &a = surface.positions[t[0]], &b = surface.positions[t[1]], &c = surface.positions[t[2]];
     all.extend(a);
     all.extend(b);
@@ -128,11 +128,9 @@ Result<std::shared_ptr<const SurfaceDistance>> SurfaceDistance::create(const Tri
   }
   const double diag = all.extent().norm();
   // Drop triangles of (relatively) zero area.
-  std::erase_if(s->tris_, [diag](const Tri& t) {
-    return !((t.b - t.a).cross(t.c - t.a).norm() > 1e-14 * diag * diag);
-  });
-  if (s->tris_.empty())
-    return file_error(name, "every triangle is degenerate (zero area): expected a closed surface");
+  std::erase_if(s->tris_,
+                [diag](const Tri& t) { return !((t.b - t.a).cross(t.c - t.a).norm() > 1e-14 * diag * diag); });
+  if (s->tris_.empty()) return file_error(name, "every triangle is degenerate (zero area): expected a closed surface");
   s->bounds_ = all;
   const std::vector<Tri> original = s->tris_;
   s->nodes_.reserve(2 * s->tris_.size() / 4 + 4);
@@ -157,9 +155,12 @@ Result<std::shared_ptr<const SurfaceDistance>> SurfaceDistance::create(const Tri
   std::sort(magnitude.begin(), magnitude.end());
   const double median = magnitude[magnitude.size() / 2];
   if (median < 0.9)
-    return file_error(name, "surface is not closed: the generalized winding number does not come near 1 "
-                            "inside it (median " + std::to_string(median) + " just below its triangles); "
-                            "expected a closed (watertight) surface");
+    return file_error(name,
+                      "surface is not closed: the generalized winding number does not come near 1 "
+                      "inside it (median " +
+                          std::to_string(median) +
+                          " just below its triangles); "
+                          "expected a closed (watertight) surface");
   if (sum < 0) s->orientation_ = -1.0;
   return std::shared_ptr<const SurfaceDistance>(std::move(s));
 }

@@ -13,8 +13,7 @@ Result<BodyModel> make_body_model(const TetMesh& world_mesh, const Material& mat
   if (world_mesh.num_tets() == 0) return make_error("the body's mesh has no tetrahedra");
   SHATTER_TRY(valid_material, validate_material(material));
   const ValidationReport report = validate_mesh(world_mesh);
-  if (report.has_errors())
-    return make_error("the body's mesh is not valid: " + report.problems.front().message);
+  if (report.has_errors()) return make_error("the body's mesh is not valid: " + report.problems.front().message);
   for (Index e = 0; e < world_mesh.num_tets(); ++e)
     if (!(signed_volume(world_mesh, e) > 0))
       return make_error("tet " + std::to_string(e) + " of the body's mesh is not positively oriented (signed volume " +

@@ -53,8 +53,8 @@ RigidInertia rigid_inertia(const MassProperties& mass) {
   r.inertia_body = 0.5 * (mass.inertia + mass.inertia.transpose());
   const Eigen::SelfAdjointEigenSolver<Mat3> eig(r.inertia_body);
   if (eig.info() == Eigen::Success && eig.eigenvalues().minCoeff() > 0)
-    r.inverse_inertia_body = eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() *
-                             eig.eigenvectors().transpose();
+    r.inverse_inertia_body =
+        eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
   return r;
 }
 

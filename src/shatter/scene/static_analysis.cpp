@@ -83,9 +83,9 @@ Result<StaticOutputs> write_static_outputs(const std::string& out_dir, const Tet
   out.elements = (dir / "elements.csv").string();
   out.result = (dir / "result.vtu").string();
   const StaticResults& results = analysis.results;
-  for (const auto& written : {write_displacements_csv(out.displacements, mesh, results),
-                              write_elements_csv(out.elements, mesh, results),
-                              write_result_mesh(out.result, mesh, results)})
+  for (const auto& written :
+       {write_displacements_csv(out.displacements, mesh, results), write_elements_csv(out.elements, mesh, results),
+        write_result_mesh(out.result, mesh, results)})
     if (!written) return written.error();
   if (!analysis.fracture) return out;
 

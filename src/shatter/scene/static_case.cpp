@@ -29,8 +29,10 @@ Result<std::uint8_t> read_components(const Json& value, const Where& where) {
   for (char ch : *s) {
     const int c = ch == 'x' ? 0 : ch == 'y' ? 1 : ch == 'z' ? 2 : -1;
     if (c < 0 || (mask & (1u << c)))
-      return where.error("expected a non-empty combination of the letters x, y, z, each at most once "
-                         "(\"xyz\", \"x\", \"yz\", ...), got \"" + *s + "\"");
+      return where.error(
+          "expected a non-empty combination of the letters x, y, z, each at most once "
+          "(\"xyz\", \"x\", \"yz\", ...), got \"" +
+          *s + "\"");
     mask = static_cast<std::uint8_t>(mask | (1u << c));
   }
   if (mask == 0) return where.error("expected at least one of x, y, z, got an empty string");
@@ -66,8 +68,9 @@ Result<NodeSelector> read_selector(ObjectReader& r) {
   const Json* jset = r.get("set");
   const int count = (jnodes != nullptr) + (jbox != nullptr) + (jplane != nullptr) + (jset != nullptr);
   if (count == 0)
-    return where.error("expected one of \"nodes\" (a list of node ids), \"box\" ({min, max}), "
-                       "\"plane\" ({point, normal, tolerance}) or \"set\" (a node set name)");
+    return where.error(
+        "expected one of \"nodes\" (a list of node ids), \"box\" ({min, max}), "
+        "\"plane\" ({point, normal, tolerance}) or \"set\" (a node set name)");
   if (count > 1) return where.error("give only one of \"nodes\", \"box\", \"plane\", \"set\"");
   NodeSelector s;
   if (jnodes) {
@@ -149,8 +152,9 @@ Result<LoadSpec> read_load(const Json& value, const Where& where) {
   const Json* jtotal = r.get("total_force");
   const Json* jdist = r.get("distribution");
   if ((jforce != nullptr) == (jtotal != nullptr))
-    return where.error("expected exactly one of \"force\" ([fx, fy, fz] N on each selected node) or "
-                       "\"total_force\" ([fx, fy, fz] N spread over the selected nodes)");
+    return where.error(
+        "expected exactly one of \"force\" ([fx, fy, fz] N on each selected node) or "
+        "\"total_force\" ([fx, fy, fz] N spread over the selected nodes)");
   if (jforce) {
     SHATTER_TRY(f, json_input::read_vec3(*jforce, where.key("force")));
     l.force = *f;
@@ -163,9 +167,12 @@ Result<LoadSpec> read_load(const Json& value, const Where& where) {
   }
   if (jdist) {
     SHATTER_TRY(d, json_input::read_string(*jdist, where.key("distribution")));
-    if (*d == "equal") l.distribution = LoadSpec::Distribution::equal;
-    else if (*d == "area") l.distribution = LoadSpec::Distribution::area;
-    else return where.key("distribution").error("expected \"equal\" or \"area\", got \"" + *d + "\"");
+    if (*d == "equal")
+      l.distribution = LoadSpec::Distribution::equal;
+    else if (*d == "area")
+      l.distribution = LoadSpec::Distribution::area;
+    else
+      return where.key("distribution").error("expected \"equal\" or \"area\", got \"" + *d + "\"");
   }
   if (r.has("tolerance") && l.where.kind != NodeSelector::Kind::box)
     return where.key("tolerance").error("only allowed with \"box\" (a plane takes its own plane.tolerance)");
@@ -209,17 +216,21 @@ Result<Material> read_material(const Json& value, const Where& where) {
     bool required;  // without a preset
   };
   const Num nums[] = {
-      {"youngs_modulus", &m.youngs_modulus, true},      {"poisson_ratio", &m.poisson_ratio, true},
-      {"density", &m.density, true},                    {"tensile_strength", &m.tensile_strength, false},
-      {"yield_stress", &m.yield_stress, false},         {"fracture_toughness", &m.fracture_toughness, false},
+      {"youngs_modulus", &m.youngs_modulus, true},
+      {"poisson_ratio", &m.poisson_ratio, true},
+      {"density", &m.density, true},
+      {"tensile_strength", &m.tensile_strength, false},
+      {"yield_stress", &m.yield_stress, false},
+      {"fracture_toughness", &m.fracture_toughness, false},
   };
   bool overridden = false;
   for (const Num& n : nums) {
     const Json* j = r.get(n.key);
     if (!j) {
       if (n.required && !from_preset)
-        return where.key(n.key).error("missing; a material without \"preset\" needs youngs_modulus (Pa), "
-                                      "poisson_ratio and density (kg/m^3)");
+        return where.key(n.key).error(
+            "missing; a material without \"preset\" needs youngs_modulus (Pa), "
+            "poisson_ratio and density (kg/m^3)");
       continue;
     }
     // Strengths may be "inf" (never cracks / never yields).
@@ -261,8 +272,7 @@ Result<CaseSolverSettings> read_solver(const Json& value, const Where& where) {
   }
   if (const Json* j = r.get("linear_max_iterations")) {
     SHATTER_TRY(v, json_input::read_integer(*j, where.key("linear_max_iterations")));
-    if (*v < 1 || *v > 10000000)
-      return where.key("linear_max_iterations").error("expected an integer in 1..10000000");
+    if (*v < 1 || *v > 10000000) return where.key("linear_max_iterations").error("expected an integer in 1..10000000");
     s.linear_max_iterations = *v;
   }
   if (const Json* j = r.get("max_iterations")) {
@@ -332,8 +342,8 @@ Result<FractureOptions> read_fracture(const Json& value, const Where& where) {
   SHATTER_TRY(g, number("creep", 0, 1, false, false, "a number in [0, 1]", o.plasticity.creep));
   SHATTER_TRY(h, number("max_plastic_strain", 0, inf, true, false, "a number > 0 (or \"inf\": never tears)",
                         o.plasticity.max_plastic_strain));
-  SHATTER_TRY(k, number("min_rest_volume_fraction", 0, 1, true, true, "a number in (0, 1)",
-                        o.plasticity.min_volume_fraction));
+  SHATTER_TRY(
+      k, number("min_rest_volume_fraction", 0, 1, true, true, "a number in (0, 1)", o.plasticity.min_volume_fraction));
   SHATTER_TRY(done, r.finish());
   return o;
 }
@@ -362,8 +372,9 @@ Result<StaticCase> parse_static_case(std::string_view json_text, const std::stri
     const std::vector<std::string> names = material_preset_names();
     std::string list;
     for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
-    return root.key("material").error("missing; expected a preset name (" + list +
-                                       ") or an object with youngs_modulus, poisson_ratio, density");
+    return root.key("material")
+        .error("missing; expected a preset name (" + list +
+               ") or an object with youngs_modulus, poisson_ratio, density");
   }
   SHATTER_TRY(material, read_material(*jmat, root.key("material")));
   c.material = std::move(*material);
@@ -375,8 +386,9 @@ Result<StaticCase> parse_static_case(std::string_view json_text, const std::stri
   }
   const Json* janchors = r.get("anchors");
   if (!janchors)
-    return root.key("anchors").error("missing; a static case needs anchors, or the body could move "
-                                     "freely (rigid motion)");
+    return root.key("anchors").error(
+        "missing; a static case needs anchors, or the body could move "
+        "freely (rigid motion)");
   {
     const Where w = root.key("anchors");
     SHATTER_TRY(arr, json_input::read_array(*janchors, w));
@@ -465,9 +477,10 @@ Result<ResolvedStaticCase> resolve_static_case(const StaticCase& c, const TetMes
       double total = 0;
       for (double a : area) total += a;
       if (!(total > 0))
-        return case_error(c, l.field, "\"distribution\": \"area\" needs selected nodes that span at least "
-                                      "one boundary triangle; the " + std::to_string(nodes->size()) +
-                                      " selected node(s) span none");
+        return case_error(c, l.field,
+                          "\"distribution\": \"area\" needs selected nodes that span at least "
+                          "one boundary triangle; the " +
+                              std::to_string(nodes->size()) + " selected node(s) span none");
       for (std::size_t k = 0; k < nodes->size(); ++k) out.forces[(*nodes)[k]] += l.force * (area[k] / total);
     }
   }
@@ -484,11 +497,12 @@ Result<ResolvedStaticCase> resolve_static_case(const StaticCase& c, const TetMes
   for (Index p = 0; p < comps.count; ++p) {
     if (holds_rigid_motion(mesh, piece_nodes[p], out.held)) continue;
     const Index first = piece_nodes[p].empty() ? 0 : piece_nodes[p].front();
-    std::string where = comps.count > 1 ? "the mesh piece containing node " + std::to_string(mesh.node_id(first))
-                                        : "the mesh";
+    std::string where =
+        comps.count > 1 ? "the mesh piece containing node " + std::to_string(mesh.node_id(first)) : "the mesh";
     return case_error(c, "anchors",
-                      "the anchors leave " + where + " free to move rigidly (translate or rotate); hold "
-                      "more components or more nodes (e.g. a whole face with \"components\": \"xyz\")");
+                      "the anchors leave " + where +
+                          " free to move rigidly (translate or rotate); hold "
+                          "more components or more nodes (e.g. a whole face with \"components\": \"xyz\")");
   }
   return out;
 }

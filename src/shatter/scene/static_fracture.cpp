@@ -92,8 +92,8 @@ Result<void> write_cracks_csv(const std::string& path, const TetMesh& input, con
     const CrackEvent& ev = r.events[k];
     const CrackPlan& p = ev.plan;
     s += std::to_string(k) + "," + std::to_string(input.tet_id(p.origin_tet));
-    for (double v : {p.origin.x(), p.origin.y(), p.origin.z(), p.normal.x(), p.normal.y(), p.normal.z(), p.radius,
-                     p.stress}) {
+    for (double v :
+         {p.origin.x(), p.origin.y(), p.origin.z(), p.normal.x(), p.normal.y(), p.normal.z(), p.radius, p.stress}) {
       s += ",";
       append_g(s, v);
     }

@@ -10,13 +10,12 @@
 
 namespace shatter {
 
-StaticResults compute_static_results(const FemModel& model, const TetMesh& rest_mesh,
-                                     const std::vector<Vec3>& x) {
+StaticResults compute_static_results(const FemModel& model, const TetMesh& rest_mesh, const std::vector<Vec3>& x) {
   return compute_static_results(model, rest_mesh, x, compute_stresses(model, x));
 }
 
-StaticResults compute_static_results(const FemModel& model, const TetMesh& rest_mesh,
-                                     const std::vector<Vec3>& x, const std::vector<TetStress>& stress) {
+StaticResults compute_static_results(const FemModel& model, const TetMesh& rest_mesh, const std::vector<Vec3>& x,
+                                     const std::vector<TetStress>& stress) {
   SHATTER_CHECK(x.size() == rest_mesh.positions.size());
   SHATTER_CHECK(model.num_tets() == rest_mesh.num_tets());
   StaticResults r;

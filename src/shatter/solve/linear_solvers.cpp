@@ -26,15 +26,14 @@ const char* to_string(LinearSolverKind kind) {
 }
 
 Result<LinearSolverKind> parse_linear_solver_kind(std::string_view name) {
-  for (LinearSolverKind k : {LinearSolverKind::direct_ldlt, LinearSolverKind::pcg_block_jacobi,
-                             LinearSolverKind::pcg_block_gauss_seidel})
+  for (LinearSolverKind k :
+       {LinearSolverKind::direct_ldlt, LinearSolverKind::pcg_block_jacobi, LinearSolverKind::pcg_block_gauss_seidel})
     if (name == to_string(k)) return k;
   return field_error("linear_solver", "unknown linear solver '" + std::string(name) +
                                           "'; expected direct, pcg-jacobi or pcg-gauss-seidel");
 }
 
-LinearSolveReport LinearSolver::solve(const BlockSparseMatrix& a, const Eigen::VectorXd& b,
-                                      Eigen::VectorXd& x) {
+LinearSolveReport LinearSolver::solve(const BlockSparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   const auto start = std::chrono::steady_clock::now();
   LinearSolveReport report;
   if (b.size() != a.size()) {
@@ -60,8 +59,7 @@ LinearSolveReport LinearSolver::solve(const BlockSparseMatrix& a, const Eigen::V
   return report;
 }
 
-LinearSolveReport LinearSolver::solve_direct(const BlockSparseMatrix& a, const Eigen::VectorXd& b,
-                                             Eigen::VectorXd& x) {
+LinearSolveReport LinearSolver::solve_direct(const BlockSparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   LinearSolveReport report;
   // The ordering and elimination tree depend only on the pattern: analyse once per pattern.
   if (analyzed_pattern_ != a.pattern_id()) {
@@ -97,8 +95,7 @@ bool LinearSolver::invert_diagonal_blocks(const BlockSparseMatrix& a, std::strin
     bool invertible = false;
     d.computeInverseWithCheck(inv, invertible, 0.0);
     if (!invertible || !inv.allFinite() || d.determinant() <= 0.0) {
-      message = "diagonal block of node " + std::to_string(a.node_of_active()[i]) +
-                " is not positive definite";
+      message = "diagonal block of node " + std::to_string(a.node_of_active()[i]) + " is not positive definite";
       return false;
     }
     diagonal_inverse_[i] = inv;
@@ -111,9 +108,9 @@ void LinearSolver::apply_preconditioner(const BlockSparseMatrix& a, const Eigen:
   const Index na = a.num_active();
   z.resize(a.size());
   if (options_.kind == LinearSolverKind::pcg_block_jacobi) {
-    parallel_for(0, na, [&](std::int64_t i) {
-      z.segment<3>(3 * i) = diagonal_inverse_[i] * r.segment<3>(3 * i);
-    }, 16384);  // ~0.01 us per block, once per PCG iteration
+    parallel_for(
+        0, na, [&](std::int64_t i) { z.segment<3>(3 * i) = diagonal_inverse_[i] * r.segment<3>(3 * i); },
+        16384);  // ~0.01 us per block, once per PCG iteration
     return;
   }
   // Symmetric block Gauss-Seidel, z = M^-1 r with M = (D+L) D^-1 (D+U) (the paper's §3.3):
@@ -150,8 +147,7 @@ void LinearSolver::apply_preconditioner(const BlockSparseMatrix& a, const Eigen:
   }
 }
 
-LinearSolveReport LinearSolver::solve_pcg(const BlockSparseMatrix& a, const Eigen::VectorXd& b,
-                                          Eigen::VectorXd& x) {
+LinearSolveReport LinearSolver::solve_pcg(const BlockSparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   LinearSolveReport report;
   if (!invert_diagonal_blocks(a, report.message)) {
     x.setZero(a.size());
@@ -196,8 +192,8 @@ LinearSolveReport LinearSolver::solve_pcg(const BlockSparseMatrix& a, const Eige
   report.relative_residual = (b - q_).norm() / b_norm;
   report.converged = report.message.empty() && r_norm <= target;
   if (!report.converged && report.message.empty())
-    report.message = "PCG reached " + std::to_string(options_.max_iterations) +
-                     " iterations at relative residual " + std::to_string(report.relative_residual);
+    report.message = "PCG reached " + std::to_string(options_.max_iterations) + " iterations at relative residual " +
+                     std::to_string(report.relative_residual);
   return report;
 }
 

@@ -34,8 +34,8 @@ bool held(AnchorMask m, int c) { return (m & (1u << c)) != 0; }
 // Smallest loops that go parallel (see parallel_for): about half a millisecond of work. An impact
 // solve of a few thousand tets then runs without a single parallel region, so it cannot stall
 // when the cores are oversubscribed.
-constexpr std::int64_t kMinParallelForceTets = 2048;    // ~0.2 us per tet
-constexpr std::int64_t kMinParallelEnergyTets = 8192;   // ~0.05 us per tet
+constexpr std::int64_t kMinParallelForceTets = 2048;   // ~0.2 us per tet
+constexpr std::int64_t kMinParallelEnergyTets = 8192;  // ~0.05 us per tet
 
 // Armijo constant of the energy line search: a step must realise this fraction of the energy
 // decrease that the slope predicts.
@@ -54,8 +54,8 @@ Result<void> check_sizes(const FemModel& model, const StaticProblem& problem, co
     return (may_be_empty && s == 0) || s == static_cast<std::size_t>(n);
   };
   if (!size_ok(x.size(), false))
-    return field_error("x", "has " + std::to_string(x.size()) + " positions, the model " +
-                                std::to_string(n) + " nodes");
+    return field_error("x",
+                       "has " + std::to_string(x.size()) + " positions, the model " + std::to_string(n) + " nodes");
   if (!size_ok(problem.anchors.size(), true))
     return field_error("anchors", "needs one mask per node (" + std::to_string(n) + ") or none");
   if (!size_ok(problem.anchor_positions.size(), true))
@@ -69,8 +69,7 @@ Result<void> check_sizes(const FemModel& model, const StaticProblem& problem, co
 
 }  // namespace
 
-StaticSolver::StaticSolver(const StaticSolverOptions& options)
-    : options_(options), linear_(options.linear) {}
+StaticSolver::StaticSolver(const StaticSolverOptions& options) : options_(options), linear_(options.linear) {}
 
 void StaticSolver::set_options(const StaticSolverOptions& options) {
   options_ = options;
@@ -96,21 +95,24 @@ void StaticSolver::active_forces(const FemModel& model, const std::vector<Vec3>&
   tet_force_.resize(tets.size());
   tet_force_error_.resize(tets.size());
   const double modulus = 2.0 * std::abs(model.lame.mu) + 3.0 * std::abs(model.lame.lambda);
-  parallel_for(0, static_cast<std::int64_t>(tets.size()), [&](std::int64_t s) {
-    const Index e = tets[static_cast<std::size_t>(s)];
-    const TetRest& rest = model.rest[e];
-    const Mat34 xe = corners(model, x, e);
-    tet_force_[static_cast<std::size_t>(s)] = tet_internal_forces(model.model, model.lame, rest, xe);
-    // Round-off estimate of each force component: the positions hold the displacements only to
-    // eps |x| (absolute), and F - I cancels; both reach the stress through the moduli and the
-    // force through V Dm^-T (f = V P Dm^-T).
-    const double g1 = rest.Dm_inv.cwiseAbs().colwise().sum().maxCoeff();    // ||Dm^-1||_1
-    const double ginf = rest.Dm_inv.cwiseAbs().rowwise().sum().maxCoeff();  // ||Dm^-1||_inf
-    const double f_norm = deformation_gradient(rest, xe).cwiseAbs().maxCoeff();
-    const double dF = std::numeric_limits<double>::epsilon() * (xe.cwiseAbs().maxCoeff() * g1 + f_norm);
-    tet_force_error_[static_cast<std::size_t>(s)] =
-        std::abs(rest.volume) * modulus * std::max(1.0, f_norm * f_norm) * dF * ginf;
-  }, kMinParallelForceTets);
+  parallel_for(
+      0, static_cast<std::int64_t>(tets.size()),
+      [&](std::int64_t s) {
+        const Index e = tets[static_cast<std::size_t>(s)];
+        const TetRest& rest = model.rest[e];
+        const Mat34 xe = corners(model, x, e);
+        tet_force_[static_cast<std::size_t>(s)] = tet_internal_forces(model.model, model.lame, rest, xe);
+        // Round-off estimate of each force component: the positions hold the displacements only to
+        // eps |x| (absolute), and F - I cancels; both reach the stress through the moduli and the
+        // force through V Dm^-T (f = V P Dm^-T).
+        const double g1 = rest.Dm_inv.cwiseAbs().colwise().sum().maxCoeff();    // ||Dm^-1||_1
+        const double ginf = rest.Dm_inv.cwiseAbs().rowwise().sum().maxCoeff();  // ||Dm^-1||_inf
+        const double f_norm = deformation_gradient(rest, xe).cwiseAbs().maxCoeff();
+        const double dF = std::numeric_limits<double>::epsilon() * (xe.cwiseAbs().maxCoeff() * g1 + f_norm);
+        tet_force_error_[static_cast<std::size_t>(s)] =
+            std::abs(rest.volume) * modulus * std::max(1.0, f_norm * f_norm) * dF * ginf;
+      },
+      kMinParallelForceTets);
   force_.assign(x.size(), Vec3::Zero());
   force_error_.assign(x.size(), 0.0);
   for (std::size_t s = 0; s < tets.size(); ++s)
@@ -123,10 +125,13 @@ void StaticSolver::active_forces(const FemModel& model, const std::vector<Vec3>&
 
 double StaticSolver::active_energy(const FemModel& model, const std::vector<Vec3>& x) const {
   const std::vector<Index>& tets = matrix_.active_tets();
-  return parallel_sum(0, static_cast<std::int64_t>(tets.size()), 0.0, [&](std::int64_t s) {
-    const Index e = tets[s];
-    return tet_energy(model.model, model.lame, model.rest[e], corners(model, x, e));
-  }, 512, kMinParallelEnergyTets);
+  return parallel_sum(
+      0, static_cast<std::int64_t>(tets.size()), 0.0,
+      [&](std::int64_t s) {
+        const Index e = tets[s];
+        return tet_energy(model.model, model.lame, model.rest[e], corners(model, x, e));
+      },
+      512, kMinParallelEnergyTets);
 }
 
 /// How a step of a solve ended: converged (go on), or the failure and why.
@@ -146,8 +151,7 @@ struct StaticSolver::SolveState {
     if (problem.anchor_positions.empty()) return;
     for (Index v = 0; v < n; ++v)
       for (int c = 0; c < 3; ++c)
-        if (held(anchors[v], c))
-          x[v][c] = x_initial[v][c] + s * (problem.anchor_positions[v][c] - x_initial[v][c]);
+        if (held(anchors[v], c)) x[v][c] = x_initial[v][c] + s * (problem.anchor_positions[v][c] - x_initial[v][c]);
   }
 
   /// The report with the outcome and the total time filled in.
@@ -161,18 +165,18 @@ struct StaticSolver::SolveState {
 
   const FemModel& model;
   const StaticProblem& problem;
-  std::vector<Vec3>& x;              ///< the caller's positions, m (#nodes): the current iterate
-  const Index n;                     ///< #nodes
+  std::vector<Vec3>& x;  ///< the caller's positions, m (#nodes): the current iterate
+  const Index n;         ///< #nodes
   const Clock::time_point start = Clock::now();
-  std::vector<AnchorMask> anchors;   ///< held components per node (#nodes; problem.anchors, or none held)
-  std::vector<Vec3> x_initial;       ///< x as passed in, m (#nodes)
-  std::vector<Vec3> load;            ///< full external load per node, N (#nodes)
-  double reference = 0;              ///< what relative residuals divide by, N
-  Eigen::VectorXd r;                 ///< residual s f_ext - F(x), N (3 #active nodes; 0 on held components)
-  Eigen::VectorXd dx;                ///< Newton step, m (3 #active nodes)
-  double round_off = 0;              ///< estimated round-off in ||r|| at the last residual evaluation, N
+  std::vector<AnchorMask> anchors;  ///< held components per node (#nodes; problem.anchors, or none held)
+  std::vector<Vec3> x_initial;      ///< x as passed in, m (#nodes)
+  std::vector<Vec3> load;           ///< full external load per node, N (#nodes)
+  double reference = 0;             ///< what relative residuals divide by, N
+  Eigen::VectorXd r;                ///< residual s f_ext - F(x), N (3 #active nodes; 0 on held components)
+  Eigen::VectorXd dx;               ///< Newton step, m (3 #active nodes)
+  double round_off = 0;             ///< estimated round-off in ||r|| at the last residual evaluation, N
   double energy = std::numeric_limits<double>::quiet_NaN();  ///< U(x) of the active tets, J (NaN: not yet known)
-  std::vector<Vec3> x_trial;         ///< line-search trial positions, m (#nodes)
+  std::vector<Vec3> x_trial;                                 ///< line-search trial positions, m (#nodes)
   StaticReport report;
 };
 
@@ -188,12 +192,11 @@ const char* to_string(SolveStatus status) {
   return "?";
 }
 
-Result<StaticReport> StaticSolver::solve(const FemModel& model, const StaticProblem& problem,
-                                         std::vector<Vec3>& x) {
+Result<StaticReport> StaticSolver::solve(const FemModel& model, const StaticProblem& problem, std::vector<Vec3>& x) {
   SolveState st(model, problem, x);
   if (Result<void> sizes = check_sizes(model, problem, x); !sizes.ok()) return std::move(sizes.error());
-  st.anchors = problem.anchors.empty() ? std::vector<AnchorMask>(static_cast<std::size_t>(st.n), anchor_none)
-                                       : problem.anchors;
+  st.anchors =
+      problem.anchors.empty() ? std::vector<AnchorMask>(static_cast<std::size_t>(st.n), anchor_none) : problem.anchors;
   if (Outcome input = check_inputs(st); !input.ok()) return st.finish(std::move(input));
   if (std::optional<Outcome> early = prepare(st)) return st.finish(std::move(*early));
 
@@ -352,9 +355,9 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
   // Inexact Newton: the linear residual need only be a tenth of what the Newton tolerance
   // allows, ||K dx - r|| <= 0.1 tol reference (never tighter than the linear option).
   LinearSolverOptions linear = options_.linear;
-  linear.relative_tolerance = std::max(
-      linear.relative_tolerance,
-      std::min(0.5, 0.1 * options_.relative_residual_tolerance / std::max(relative_residual, 1e-300)));
+  linear.relative_tolerance =
+      std::max(linear.relative_tolerance,
+               std::min(0.5, 0.1 * options_.relative_residual_tolerance / std::max(relative_residual, 1e-300)));
   const bool pcg = linear.kind != LinearSolverKind::direct_ldlt;
   linear.warm_start = false;
   if (pcg && iteration == 0 && options_.warm_start && first_step_.size() == st.r.size()) {
@@ -419,8 +422,8 @@ StaticSolver::Outcome StaticSolver::line_search(SolveState& st, double s) {
   return {SolveStatus::line_search_failed, "line search found no energy decrease"};
 }
 
-Result<StaticReport> solve_static(const FemModel& model, const StaticProblem& problem,
-                                  std::vector<Vec3>& x, const StaticSolverOptions& options) {
+Result<StaticReport> solve_static(const FemModel& model, const StaticProblem& problem, std::vector<Vec3>& x,
+                                  const StaticSolverOptions& options) {
   StaticSolver solver(options);
   return solver.solve(model, problem, x);
 }

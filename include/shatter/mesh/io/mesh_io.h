@@ -26,19 +26,19 @@ namespace shatter {
 /// A mesh as read, with notes on what the file held that is not a linear tet.
 struct MeshReadResult {
   TetMesh mesh;
-  std::string format;                 ///< "msh 4.1 binary", "vtk 5.1 ascii", ...
-  std::vector<std::string> skipped;   ///< e.g. "120 triangles (gmsh type 2)", one line per kind
+  std::string format;                ///< "msh 4.1 binary", "vtk 5.1 ascii", ...
+  std::vector<std::string> skipped;  ///< e.g. "120 triangles (gmsh type 2)", one line per kind
 };
 
 /// Per-node and per-tet data written alongside a mesh (VTU / VTK / MSH views).
 struct MeshField {
   std::string name;
-  int components = 1;                 ///< 1 (scalar), 3 (vector), 6 (symmetric tensor xx yy zz xy yz zx) ...
-  std::vector<double> values;         ///< (#nodes or #tets) x components, row-major
+  int components = 1;          ///< 1 (scalar), 3 (vector), 6 (symmetric tensor xx yy zz xy yz zx) ...
+  std::vector<double> values;  ///< (#nodes or #tets) x components, row-major
 };
 struct MeshFields {
-  std::vector<MeshField> node_fields; ///< point data
-  std::vector<MeshField> tet_fields;  ///< cell data
+  std::vector<MeshField> node_fields;  ///< point data
+  std::vector<MeshField> tet_fields;   ///< cell data
 };
 
 enum class MeshFormat { unknown, msh, tetgen, vtk, vtu, medit, inp };
@@ -46,8 +46,8 @@ enum class MeshFormat { unknown, msh, tetgen, vtk, vtu, medit, inp };
 MeshFormat mesh_format_from_path(const std::string& path);
 
 struct MeshWriteOptions {
-  bool binary = false;                ///< msh / vtk / vtu: binary payload (vtu: base64 inline)
-  MeshFields fields;                  ///< written where the format can hold them (vtu, vtk)
+  bool binary = false;  ///< msh / vtk / vtu: binary payload (vtu: base64 inline)
+  MeshFields fields;    ///< written where the format can hold them (vtu, vtk)
 };
 
 struct ReadMeshOptions {
@@ -99,13 +99,12 @@ enum class SurfaceFormat { unknown, obj, ply, stl };
 SurfaceFormat surface_format_from_path(const std::string& path);
 
 struct SurfaceWriteOptions {
-  bool binary = false;                ///< ply / stl
+  bool binary = false;  ///< ply / stl
   /// File id of each vertex (e.g. the tet-mesh node id), written where the format can hold it
   /// (PLY property `id`; an OBJ comment). Empty: none.
   std::vector<FileId> vertex_ids;
 };
-Result<void> write_surface(const std::string& path, const TriSurface& surface,
-                           const SurfaceWriteOptions& options = {});
+Result<void> write_surface(const std::string& path, const TriSurface& surface, const SurfaceWriteOptions& options = {});
 Result<void> write_obj(std::ostream& out, const TriSurface& surface, const SurfaceWriteOptions& options = {});
 Result<void> write_ply(std::ostream& out, const TriSurface& surface, const SurfaceWriteOptions& options = {});
 Result<void> write_stl(std::ostream& out, const TriSurface& surface, const SurfaceWriteOptions& options = {});
@@ -113,9 +112,9 @@ Result<void> write_stl(std::ostream& out, const TriSurface& surface, const Surfa
 /// A triangle surface as read (positions + triangles; vertex_node / triangle_tet left empty).
 struct SurfaceReadResult {
   TriSurface surface;
-  std::vector<FileId> vertex_ids;     ///< from PLY `id` property, else empty
+  std::vector<FileId> vertex_ids;  ///< from PLY `id` property, else empty
   std::string format;
-  std::vector<std::string> skipped;   ///< e.g. "3 lines", "polygons triangulated: 12"
+  std::vector<std::string> skipped;  ///< e.g. "3 lines", "polygons triangulated: 12"
 };
 /// OBJ (v/f; polygons fan-triangulated; negative indices), PLY (ASCII / binary LE and BE),
 /// STL (ASCII / binary; coincident vertices welded exactly).

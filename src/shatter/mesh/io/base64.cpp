@@ -54,7 +54,8 @@ bool base64_decode(std::string_view text, std::string& out, std::size_t& bad_pos
     if (c == ' ' || c == '\n' || c == '\r' || c == '\t') continue;
     if (c == '=') {
       // Close the current group: 2 sextets -> 1 byte, 3 -> 2 bytes.
-      if (n == 2) out += static_cast<char>(acc >> 4);
+      if (n == 2)
+        out += static_cast<char>(acc >> 4);
       else if (n == 3) {
         out += static_cast<char>(acc >> 10);
         out += static_cast<char>((acc >> 2) & 0xFF);
@@ -81,7 +82,8 @@ bool base64_decode(std::string_view text, std::string& out, std::size_t& bad_pos
     }
   }
   // Unpadded tail.
-  if (n == 2) out += static_cast<char>(acc >> 4);
+  if (n == 2)
+    out += static_cast<char>(acc >> 4);
   else if (n == 3) {
     out += static_cast<char>(acc >> 10);
     out += static_cast<char>((acc >> 2) & 0xFF);

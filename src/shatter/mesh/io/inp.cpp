@@ -7,8 +7,8 @@
 #include <unordered_set>
 
 #include "shatter/mesh/io/io_util.h"
-#include "shatter/mesh/io/mesh_io_util.h"
 #include "shatter/mesh/io/mesh_io.h"
+#include "shatter/mesh/io/mesh_io_util.h"
 #include "shatter/mesh/io/text_cursor.h"
 
 namespace shatter {
@@ -26,8 +26,8 @@ std::string to_upper(std::string_view s) {
 /// A keyword line: "*ELEMENT, TYPE=C3D4, ELSET=A" -> name "ELEMENT", params {TYPE: C3D4, ELSET: A}.
 struct Keyword {
   std::int64_t line = 0;
-  std::string name;                          ///< upper case, without '*'
-  std::map<std::string, std::string> params; ///< upper-case key -> value as written (quotes removed)
+  std::string name;                           ///< upper case, without '*'
+  std::map<std::string, std::string> params;  ///< upper-case key -> value as written (quotes removed)
   [[nodiscard]] bool has(const std::string& key) const { return params.count(key) > 0; }
   [[nodiscard]] std::string get(const std::string& key) const {
     const auto it = params.find(key);
@@ -130,14 +130,17 @@ class InpReader {
           s.line = line;
           s.generate = kw.has("GENERATE");
           sets_.push_back(std::move(s));
-          if (sets_.back().nodes) (void)node_set(sets_.back().name);
-          else (void)tet_set(sets_.back().name);
+          if (sets_.back().nodes)
+            (void)node_set(sets_.back().name);
+          else
+            (void)tet_set(sets_.back().name);
         } else {
           ++skipped_keywords_["*" + kw.name];
         }
         continue;
       }
-      if (!have_kw) return c_.error_at(line, "expected a keyword line (*NODE, *ELEMENT, ...), found " + io::quote_token(text));
+      if (!have_kw)
+        return c_.error_at(line, "expected a keyword line (*NODE, *ELEMENT, ...), found " + io::quote_token(text));
       if (block == Block::skip) continue;
       auto fields = io::split_fields(text, ',');
       const bool continues = fields.size() > 1 && fields.back().empty();
@@ -185,7 +188,8 @@ class InpReader {
 
   Result<FileId> id_field(std::string_view f, std::int64_t line, const char* what) {
     std::int64_t v = 0;
-    if (!io::parse_int(f, v)) return c_.error_at(line, std::string("expected ") + what + " (an integer), found " + io::quote_token(f));
+    if (!io::parse_int(f, v))
+      return c_.error_at(line, std::string("expected ") + what + " (an integer), found " + io::quote_token(f));
     return v;
   }
 
@@ -200,7 +204,8 @@ class InpReader {
         return c_.error_at(line, "expected a coordinate (a finite number), found " + io::quote_token(f[k]));
       p[static_cast<int>(k) - 1] = x;
     }
-    if (mesh().positions.size() >= static_cast<std::size_t>(io::kMaxEntities)) return c_.error_at(line, "too many nodes");
+    if (mesh().positions.size() >= static_cast<std::size_t>(io::kMaxEntities))
+      return c_.error_at(line, "too many nodes");
     const auto index = static_cast<Index>(mesh().positions.size());
     if (!node_index_.insert(*id, index)) return c_.error_at(line, "node " + std::to_string(*id) + " is defined twice");
     mesh().positions.push_back(p);
@@ -209,7 +214,8 @@ class InpReader {
     return {};
   }
 
-  Result<void> read_tet(const std::vector<std::string_view>& f, std::int64_t line, TetKind kind, std::vector<Index>* set) {
+  Result<void> read_tet(const std::vector<std::string_view>& f, std::int64_t line, TetKind kind,
+                        std::vector<Index>* set) {
     SHATTER_TRY(id, id_field(f[0], line, "element number"));
     if (raw_tets_.size() >= static_cast<std::size_t>(io::kMaxEntities)) return c_.error_at(line, "too many elements");
     const auto index = static_cast<Index>(raw_tets_.size());
@@ -277,10 +283,12 @@ class InpReader {
           if (inc <= 0 || *last < *first)
             return c_.error_at(item.line, "expected first <= last and increment > 0 after GENERATE");
           const std::uint64_t count = (static_cast<std::uint64_t>(*last) - static_cast<std::uint64_t>(*first)) /
-                                          static_cast<std::uint64_t>(inc) + 1;
+                                          static_cast<std::uint64_t>(inc) +
+                                      1;
           if (count > defined)
             return c_.error_at(item.line, "GENERATE range of " + std::to_string(count) + " ids is larger than the " +
-                                              std::to_string(defined) + (s.nodes ? " nodes" : " elements") + " defined");
+                                              std::to_string(defined) + (s.nodes ? " nodes" : " elements") +
+                                              " defined");
           for (std::uint64_t k = 0; k < count; ++k) {
             SHATTER_TRY(ok, add_id(target, lookup, *first + static_cast<std::int64_t>(k) * inc, item.line, s.nodes));
           }
@@ -367,7 +375,8 @@ Result<void> check_set_name(const std::string& name) {
   if (name.empty()) return make_error("inp: empty set name");
   for (char ch : name)
     if (static_cast<unsigned char>(ch) < 32 || ch == ',' || ch == '=' || ch == '*' || ch == '"' || ch == 127)
-      return make_error("inp: set name " + io::quote_token(name) + " cannot be written (no , = * \" or control characters)");
+      return make_error("inp: set name " + io::quote_token(name) +
+                        " cannot be written (no , = * \" or control characters)");
   return {};
 }
 

@@ -4,8 +4,8 @@
 #include <string>
 
 #include "shatter/mesh/io/io_util.h"
-#include "shatter/mesh/io/mesh_io_util.h"
 #include "shatter/mesh/io/mesh_io.h"
+#include "shatter/mesh/io/mesh_io_util.h"
 #include "shatter/mesh/io/text_cursor.h"
 
 namespace shatter {
@@ -20,13 +20,30 @@ int skipped_row_size(std::string_view keyword) {
     int size;
   };
   static constexpr Entry kTable[] = {
-      {"Edges", 3},           {"Triangles", 4},        {"Quadrilaterals", 5},    {"Prisms", 7},
-      {"Pyramids", 6},        {"Hexahedra", 9},        {"Hexaedra", 9},          {"Corners", 1},
-      {"RequiredVertices", 1},{"Ridges", 1},           {"RequiredEdges", 1},     {"RequiredTriangles", 1},
-      {"Normals", 3},         {"Tangents", 3},         {"NormalAtVertices", 2},  {"TangentAtVertices", 2},
-      {"NormalAtTriangleVertices", 3},                 {"SubDomainFromMesh", 4}, {"VertexOnGeometricVertex", 2},
-      {"VertexOnGeometricEdge", 3},                    {"EdgeOnGeometricEdge", 2},
-      {"EdgesP2", 4},         {"TrianglesP2", 7},      {"TetrahedraP2", 11},
+      {"Edges", 3},
+      {"Triangles", 4},
+      {"Quadrilaterals", 5},
+      {"Prisms", 7},
+      {"Pyramids", 6},
+      {"Hexahedra", 9},
+      {"Hexaedra", 9},
+      {"Corners", 1},
+      {"RequiredVertices", 1},
+      {"Ridges", 1},
+      {"RequiredEdges", 1},
+      {"RequiredTriangles", 1},
+      {"Normals", 3},
+      {"Tangents", 3},
+      {"NormalAtVertices", 2},
+      {"TangentAtVertices", 2},
+      {"NormalAtTriangleVertices", 3},
+      {"SubDomainFromMesh", 4},
+      {"VertexOnGeometricVertex", 2},
+      {"VertexOnGeometricEdge", 3},
+      {"EdgeOnGeometricEdge", 2},
+      {"EdgesP2", 4},
+      {"TrianglesP2", 7},
+      {"TetrahedraP2", 11},
   };
   for (const Entry& e : kTable)
     if (keyword == e.name) return e.size;
@@ -93,7 +110,7 @@ Result<MeshReadResult> parse_medit(std::string_view bytes, const std::string& na
           p[k] = *x;
         }
         SHATTER_TRY(ref, c.next_int_in("vertex reference", std::numeric_limits<std::int32_t>::min(),
-                                        std::numeric_limits<std::int32_t>::max(), kComment));
+                                       std::numeric_limits<std::int32_t>::max(), kComment));
         mesh.positions.push_back(p);
         mesh.node_tags.push_back(static_cast<std::int32_t>(*ref));
       }
@@ -111,7 +128,7 @@ Result<MeshReadResult> parse_medit(std::string_view bytes, const std::string& na
           t[k] = static_cast<Index>(*v - 1);
         }
         SHATTER_TRY(ref, c.next_int_in("tetrahedron reference", std::numeric_limits<std::int32_t>::min(),
-                                        std::numeric_limits<std::int32_t>::max(), kComment));
+                                       std::numeric_limits<std::int32_t>::max(), kComment));
         mesh.tets.push_back(t);
         mesh.tet_tags.push_back(static_cast<std::int32_t>(*ref));
       }

@@ -72,9 +72,12 @@ Result<void> write_mesh(const std::string& path, const TetMesh& mesh, const Mesh
       SHATTER_TRY(a, write_file_atomic(node_path, [&](std::ostream& out) { return write_tetgen_node(out, mesh); }));
       return write_file_atomic(ele_path, [&](std::ostream& out) { return write_tetgen_ele(out, mesh); });
     }
-    case MeshFormat::msh: return write_file_atomic(path, [&](std::ostream& out) { return write_msh(out, mesh, options); });
-    case MeshFormat::vtk: return write_file_atomic(path, [&](std::ostream& out) { return write_vtk(out, mesh, options); });
-    case MeshFormat::vtu: return write_file_atomic(path, [&](std::ostream& out) { return write_vtu(out, mesh, options); });
+    case MeshFormat::msh:
+      return write_file_atomic(path, [&](std::ostream& out) { return write_msh(out, mesh, options); });
+    case MeshFormat::vtk:
+      return write_file_atomic(path, [&](std::ostream& out) { return write_vtk(out, mesh, options); });
+    case MeshFormat::vtu:
+      return write_file_atomic(path, [&](std::ostream& out) { return write_vtu(out, mesh, options); });
     case MeshFormat::medit: return write_file_atomic(path, [&](std::ostream& out) { return write_medit(out, mesh); });
     case MeshFormat::inp: return write_file_atomic(path, [&](std::ostream& out) { return write_inp(out, mesh); });
   }

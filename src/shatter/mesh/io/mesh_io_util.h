@@ -20,14 +20,29 @@ class WriteBuffer {
   WriteBuffer(const WriteBuffer&) = delete;
   WriteBuffer& operator=(const WriteBuffer&) = delete;
   std::string& text() { return buf_; }
-  WriteBuffer& operator<<(std::string_view s) { buf_ += s; maybe_flush(); return *this; }
-  WriteBuffer& operator<<(char c) { buf_ += c; return *this; }
-  void number(double v) { append_double(buf_, v); maybe_flush(); }
-  void integer(std::int64_t v) { append_int(buf_, v); maybe_flush(); }
+  WriteBuffer& operator<<(std::string_view s) {
+    buf_ += s;
+    maybe_flush();
+    return *this;
+  }
+  WriteBuffer& operator<<(char c) {
+    buf_ += c;
+    return *this;
+  }
+  void number(double v) {
+    append_double(buf_, v);
+    maybe_flush();
+  }
+  void integer(std::int64_t v) {
+    append_int(buf_, v);
+    maybe_flush();
+  }
   /// Raw bytes of a trivially copyable value, little- or big-endian.
   template <class T>
   void raw(T v, bool big_endian);
-  void maybe_flush() { if (buf_.size() >= (1u << 20)) flush(); }
+  void maybe_flush() {
+    if (buf_.size() >= (1u << 20)) flush();
+  }
   void flush();
   /// False if the stream failed.
   [[nodiscard]] bool good() const;

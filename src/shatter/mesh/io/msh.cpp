@@ -120,7 +120,8 @@ class MshReader {
   Result<MeshReadResult> read() {
     const std::string_view first = c_.next_token();
     if (first.empty()) return c_.error("empty file: expected '$MeshFormat'");
-    if (first != "$MeshFormat") return c_.error("not a Gmsh MSH file: expected '$MeshFormat', found " + io::quote_token(first));
+    if (first != "$MeshFormat")
+      return c_.error("not a Gmsh MSH file: expected '$MeshFormat', found " + io::quote_token(first));
     if (auto r = read_format(); !r) return r.error();
     bool have_nodes = false, have_elements = false;
     for (;;) {
@@ -312,7 +313,8 @@ class MshReader {
 
   Result<void> build_lookup() {
     FileId dup = 0;
-    if (!lookup_.build(node_tags_, dup)) return c_.error("node tag " + std::to_string(dup) + " appears twice in $Nodes");
+    if (!lookup_.build(node_tags_, dup))
+      return c_.error("node tag " + std::to_string(dup) + " appears twice in $Nodes");
     return {};
   }
 
@@ -361,7 +363,8 @@ class MshReader {
       SHATTER_TRY(total, b.u64("node count"));
       SHATTER_TRY(min_tag, b.u64("min node tag"));
       SHATTER_TRY(max_tag, b.u64("max node tag"));
-      if (*total > static_cast<std::uint64_t>(kMaxIndex)) return b.error("node count " + std::to_string(*total) + " exceeds the limit of 2^31-1");
+      if (*total > static_cast<std::uint64_t>(kMaxIndex))
+        return b.error("node count " + std::to_string(*total) + " exceeds the limit of 2^31-1");
       if (auto r = b.require(*total, 32, "nodes"); !r) return r;
       if (auto r = b.require(*nblocks, 20, "node blocks"); !r) return r;
       positions_.reserve(static_cast<std::size_t>(*total));
@@ -372,7 +375,8 @@ class MshReader {
         SHATTER_TRY(param, b.i32("parametric flag"));
         SHATTER_TRY(n, b.u64("nodes in block"));
         if (*dim < 0 || *dim > 3) return b.error("entity dimension must be 0..3, found " + std::to_string(*dim));
-        if (*n > *total - positions_.size()) return b.error("node blocks hold more nodes than the " + std::to_string(*total) + " declared");
+        if (*n > *total - positions_.size())
+          return b.error("node blocks hold more nodes than the " + std::to_string(*total) + " declared");
         const std::uint64_t ncoord = 3 + (*param != 0 ? static_cast<std::uint64_t>(*dim) : 0);
         if (auto r = b.require(*n, 8 + 8 * ncoord, "nodes in block"); !r) return r;
         const std::size_t first = node_tags_.size();
@@ -392,7 +396,8 @@ class MshReader {
         }
       }
       if (positions_.size() != *total)
-        return b.error("node blocks hold " + std::to_string(positions_.size()) + " nodes, " + std::to_string(*total) + " declared");
+        return b.error("node blocks hold " + std::to_string(positions_.size()) + " nodes, " + std::to_string(*total) +
+                       " declared");
       (void)c_.take_bytes(b.position() - c_.position(), "nodes");
     } else {
       SHATTER_TRY(nblocks, c_.next_int("node block count"));
@@ -427,7 +432,8 @@ class MshReader {
         }
       }
       if (static_cast<std::int64_t>(positions_.size()) != *total)
-        return c_.error("node blocks hold " + std::to_string(positions_.size()) + " nodes, " + std::to_string(*total) + " declared");
+        return c_.error("node blocks hold " + std::to_string(positions_.size()) + " nodes, " + std::to_string(*total) +
+                        " declared");
     }
     if (auto r = build_lookup(); !r) return r;
     return end_section("$EndNodes");
@@ -466,7 +472,8 @@ class MshReader {
         SHATTER_TRY(ntags, b.i32("tag count"));
         const GmshType* gt = find_type(*type);
         if (!gt) return b.error("unknown gmsh element type " + std::to_string(*type) + " in binary file");
-        if (*follow < 0 || *follow > *n - done) return b.error("element block of " + std::to_string(*follow) + " elements exceeds the declared count");
+        if (*follow < 0 || *follow > *n - done)
+          return b.error("element block of " + std::to_string(*follow) + " elements exceeds the declared count");
         if (*ntags < 0) return b.error("negative tag count " + std::to_string(*ntags));
         const std::uint64_t per = 1 + static_cast<std::uint64_t>(*ntags) + static_cast<std::uint64_t>(gt->nodes);
         if (auto r = b.require(static_cast<std::uint64_t>(*follow), per * 4, "elements"); !r) return r;
@@ -543,7 +550,8 @@ class MshReader {
         SHATTER_TRY(n, b.u64("elements in block"));
         const GmshType* gt = find_type(*type);
         if (!gt) return b.error("unknown gmsh element type " + std::to_string(*type) + " in binary file");
-        if (*n > *total - done) return b.error("element blocks hold more elements than the " + std::to_string(*total) + " declared");
+        if (*n > *total - done)
+          return b.error("element blocks hold more elements than the " + std::to_string(*total) + " declared");
         const std::uint64_t per = 1 + static_cast<std::uint64_t>(gt->nodes);
         if (auto r = b.require(*n, per * 8, "elements in block"); !r) return r;
         if (gt->type != 4) {
@@ -558,14 +566,17 @@ class MshReader {
               SHATTER_TRY(x, b.u64("node tag"));
               v = static_cast<FileId>(*x);
             }
-            if (auto r = add_tet(static_cast<FileId>(*id), nodes, phys, [&](const std::string& m) { return b.error(m); }); !r)
+            if (auto r =
+                    add_tet(static_cast<FileId>(*id), nodes, phys, [&](const std::string& m) { return b.error(m); });
+                !r)
               return r;
           }
         }
         done += *n;
       }
       if (done != *total)
-        return b.error("element blocks hold " + std::to_string(done) + " elements, " + std::to_string(*total) + " declared");
+        return b.error("element blocks hold " + std::to_string(done) + " elements, " + std::to_string(*total) +
+                       " declared");
       (void)c_.take_bytes(b.position() - c_.position(), "elements");
       return end_section("$EndElements");
     }
@@ -615,7 +626,8 @@ class MshReader {
       done += *n;
     }
     if (done != *total)
-      return c_.error("element blocks hold " + std::to_string(done) + " elements, " + std::to_string(*total) + " declared");
+      return c_.error("element blocks hold " + std::to_string(done) + " elements, " + std::to_string(*total) +
+                      " declared");
     return end_section("$EndElements");
   }
 
@@ -629,12 +641,17 @@ class MshReader {
 
   Result<MeshReadResult> finish() {
     MeshReadResult out;
-    out.format = "msh " + std::string(version_ == 4 ? "4.1" : version_text_ == "2" ? "2.0" : version_text_) +
+    out.format = "msh " +
+                 std::string(version_ == 4          ? "4.1"
+                             : version_text_ == "2" ? "2.0"
+                                                    : version_text_) +
                  (binary_ ? " binary" : " ascii");
     if (tets_.empty()) {
       std::string what;
-      for (const auto& [type, n] : skipped_elements_) what += (what.empty() ? "" : ", ") + std::to_string(n) + " of gmsh type " + std::to_string(type);
-      return c_.error("no linear tetrahedra (gmsh type 4) in the file" + (what.empty() ? std::string() : " (found " + what + ")"));
+      for (const auto& [type, n] : skipped_elements_)
+        what += (what.empty() ? "" : ", ") + std::to_string(n) + " of gmsh type " + std::to_string(type);
+      return c_.error("no linear tetrahedra (gmsh type 4) in the file" +
+                      (what.empty() ? std::string() : " (found " + what + ")"));
     }
     TetMesh& m = out.mesh;
     m.positions = std::move(positions_);
@@ -644,8 +661,9 @@ class MshReader {
     if (any_phys_) m.tet_tags = std::move(tet_phys_);
     for (const auto& [type, n] : skipped_elements_) {
       const GmshType* gt = find_type(type);
-      out.skipped.push_back(gt ? io::count_phrase(n, gt->singular, gt->plural) + " (gmsh type " + std::to_string(type) + ")"
-                               : io::count_phrase(n, "element", "elements") + " of unknown gmsh type " + std::to_string(type));
+      out.skipped.push_back(
+          gt ? io::count_phrase(n, gt->singular, gt->plural) + " (gmsh type " + std::to_string(type) + ")"
+             : io::count_phrase(n, "element", "elements") + " of unknown gmsh type " + std::to_string(type));
     }
     if (!skipped_elements_.empty()) {
       const Index dropped = io::drop_unused_nodes(m);
@@ -698,13 +716,17 @@ Result<void> write_msh(std::ostream& out, const TetMesh& mesh, const MeshWriteOp
   const bool bin = options.binary;
   const Index nn = mesh.num_nodes(), ne = mesh.num_tets();
   if (!mesh.node_ids.empty() && mesh.node_ids.size() != static_cast<std::size_t>(nn))
-    return make_error("write_msh: node_ids has " + std::to_string(mesh.node_ids.size()) + " entries for " + std::to_string(nn) + " nodes");
+    return make_error("write_msh: node_ids has " + std::to_string(mesh.node_ids.size()) + " entries for " +
+                      std::to_string(nn) + " nodes");
   if (!mesh.tet_ids.empty() && mesh.tet_ids.size() != static_cast<std::size_t>(ne))
-    return make_error("write_msh: tet_ids has " + std::to_string(mesh.tet_ids.size()) + " entries for " + std::to_string(ne) + " tets");
+    return make_error("write_msh: tet_ids has " + std::to_string(mesh.tet_ids.size()) + " entries for " +
+                      std::to_string(ne) + " tets");
   const bool tagged = !mesh.tet_tags.empty();
   if (tagged && mesh.tet_tags.size() != static_cast<std::size_t>(ne))
-    return make_error("write_msh: tet_tags has " + std::to_string(mesh.tet_tags.size()) + " entries for " + std::to_string(ne) + " tets");
-  FileId min_node = std::numeric_limits<FileId>::max(), max_node = 0, min_tet = std::numeric_limits<FileId>::max(), max_tet = 0;
+    return make_error("write_msh: tet_tags has " + std::to_string(mesh.tet_tags.size()) + " entries for " +
+                      std::to_string(ne) + " tets");
+  FileId min_node = std::numeric_limits<FileId>::max(), max_node = 0, min_tet = std::numeric_limits<FileId>::max(),
+         max_tet = 0;
   for (Index i = 0; i < nn; ++i) {
     const FileId id = mesh.node_id(i);
     if (id <= 0) return make_error("write_msh: node id " + std::to_string(id) + " is not positive (Gmsh tags are > 0)");
@@ -721,7 +743,9 @@ Result<void> write_msh(std::ostream& out, const TetMesh& mesh, const MeshWriteOp
   if (ne == 0) min_tet = 0;
   for (Index e = 0; e < ne; ++e)
     for (Index v : mesh.tets[e])
-      if (v < 0 || v >= nn) return make_error("write_msh: tet " + std::to_string(mesh.tet_id(e)) + " has node index " + std::to_string(v) + " out of range");
+      if (v < 0 || v >= nn)
+        return make_error("write_msh: tet " + std::to_string(mesh.tet_id(e)) + " has node index " + std::to_string(v) +
+                          " out of range");
 
   io::WriteBuffer w(out);
   auto size_t_val = [&](std::uint64_t v) { w.raw(v, false); };
@@ -748,7 +772,8 @@ Result<void> write_msh(std::ostream& out, const TetMesh& mesh, const MeshWriteOp
       const std::int32_t t = mesh.tet_tags[set[0]];
       bool same = set.size() == tag_count[t];
       for (Index e : set) same = same && e >= 0 && e < ne && mesh.tet_tags[e] == t;
-      if (same && name.find('"') == std::string::npos && name.find('\n') == std::string::npos) names.emplace_back(t, name);
+      if (same && name.find('"') == std::string::npos && name.find('\n') == std::string::npos)
+        names.emplace_back(t, name);
     }
     std::sort(names.begin(), names.end());
   }

@@ -12,7 +12,9 @@ namespace shatter {
 Result<void> PvdSeries::add(double time, const std::string& file) {
   if (!std::isfinite(time)) return make_error("PvdSeries::add: time " + std::to_string(time) + " is not finite");
   entries_.emplace_back(time, file);
-  std::string text = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n";
+  std::string text =
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  "
+      "<Collection>\n";
   for (const auto& [t, f] : entries_) {
     text += "    <DataSet timestep=\"";
     io::append_double(text, t);

@@ -26,18 +26,18 @@ struct TypeRow {
 };
 
 constexpr TypeRow kTypes[] = {
-  // type         size  float  legacy VTK                                   VTU                  PLY
-  {ScalarType::bit, 0, false, {"bit"},                                     {},                  {}},
-  {ScalarType::i8,  1, false, {"char", "vtktypeint8"},                     {"Int8", "Char"},    {"char", "int8"}},
-  {ScalarType::u8,  1, false, {"unsigned_char", "vtktypeuint8"},           {"UInt8", "UChar"},  {"uchar", "uint8"}},
-  {ScalarType::i16, 2, false, {"short", "vtktypeint16"},                   {"Int16"},           {"short", "int16"}},
-  {ScalarType::u16, 2, false, {"unsigned_short", "vtktypeuint16"},         {"UInt16"},          {"ushort", "uint16"}},
-  {ScalarType::i32, 4, false, {"int", "vtktypeint32"},                     {"Int32"},           {"int", "int32"}},
-  {ScalarType::u32, 4, false, {"unsigned_int", "vtktypeuint32"},           {"UInt32"},          {"uint", "uint32"}},
-  {ScalarType::i64, 8, false, {"long", "vtktypeint64", "vtkidtype"},       {"Int64"},           {"int64"}},
-  {ScalarType::u64, 8, false, {"unsigned_long", "vtktypeuint64"},          {"UInt64"},          {"uint64"}},
-  {ScalarType::f32, 4, true,  {"float", "vtktypefloat32"},                 {"Float32"},         {"float", "float32"}},
-  {ScalarType::f64, 8, true,  {"double", "vtktypefloat64"},                {"Float64"},         {"double", "float64"}},
+    // type         size  float  legacy VTK                                   VTU                  PLY
+    {ScalarType::bit, 0, false, {"bit"}, {}, {}},
+    {ScalarType::i8, 1, false, {"char", "vtktypeint8"}, {"Int8", "Char"}, {"char", "int8"}},
+    {ScalarType::u8, 1, false, {"unsigned_char", "vtktypeuint8"}, {"UInt8", "UChar"}, {"uchar", "uint8"}},
+    {ScalarType::i16, 2, false, {"short", "vtktypeint16"}, {"Int16"}, {"short", "int16"}},
+    {ScalarType::u16, 2, false, {"unsigned_short", "vtktypeuint16"}, {"UInt16"}, {"ushort", "uint16"}},
+    {ScalarType::i32, 4, false, {"int", "vtktypeint32"}, {"Int32"}, {"int", "int32"}},
+    {ScalarType::u32, 4, false, {"unsigned_int", "vtktypeuint32"}, {"UInt32"}, {"uint", "uint32"}},
+    {ScalarType::i64, 8, false, {"long", "vtktypeint64", "vtkidtype"}, {"Int64"}, {"int64"}},
+    {ScalarType::u64, 8, false, {"unsigned_long", "vtktypeuint64"}, {"UInt64"}, {"uint64"}},
+    {ScalarType::f32, 4, true, {"float", "vtktypefloat32"}, {"Float32"}, {"float", "float32"}},
+    {ScalarType::f64, 8, true, {"double", "vtktypefloat64"}, {"Float64"}, {"double", "float64"}},
 };
 
 // Rows are in enum order, so a type's row is kTypes[type].
@@ -76,13 +76,41 @@ bool is_float(ScalarType t) { return row(t).floating; }
 Result<Scalar> read_scalar(ByteCursor& b, ScalarType t, const char* what) {
   Scalar v;
   switch (t) {
-    case ScalarType::i8: { SHATTER_TRY(x, b.u8(what)); v.i = static_cast<std::int8_t>(*x); break; }
-    case ScalarType::u8: { SHATTER_TRY(x, b.u8(what)); v.i = *x; break; }
-    case ScalarType::i16: { SHATTER_TRY(x, b.u16(what)); v.i = static_cast<std::int16_t>(*x); break; }
-    case ScalarType::u16: { SHATTER_TRY(x, b.u16(what)); v.i = *x; break; }
-    case ScalarType::i32: { SHATTER_TRY(x, b.i32(what)); v.i = *x; break; }
-    case ScalarType::u32: { SHATTER_TRY(x, b.u32(what)); v.i = *x; break; }
-    case ScalarType::i64: { SHATTER_TRY(x, b.i64(what)); v.i = *x; break; }
+    case ScalarType::i8: {
+      SHATTER_TRY(x, b.u8(what));
+      v.i = static_cast<std::int8_t>(*x);
+      break;
+    }
+    case ScalarType::u8: {
+      SHATTER_TRY(x, b.u8(what));
+      v.i = *x;
+      break;
+    }
+    case ScalarType::i16: {
+      SHATTER_TRY(x, b.u16(what));
+      v.i = static_cast<std::int16_t>(*x);
+      break;
+    }
+    case ScalarType::u16: {
+      SHATTER_TRY(x, b.u16(what));
+      v.i = *x;
+      break;
+    }
+    case ScalarType::i32: {
+      SHATTER_TRY(x, b.i32(what));
+      v.i = *x;
+      break;
+    }
+    case ScalarType::u32: {
+      SHATTER_TRY(x, b.u32(what));
+      v.i = *x;
+      break;
+    }
+    case ScalarType::i64: {
+      SHATTER_TRY(x, b.i64(what));
+      v.i = *x;
+      break;
+    }
     case ScalarType::u64: {
       SHATTER_TRY(x, b.u64(what));
       if (*x > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()))
@@ -110,8 +138,10 @@ Result<Scalar> read_scalar(ByteCursor& b, ScalarType t, const char* what) {
 Result<void> read_scalars(ByteCursor& b, ScalarType t, std::uint64_t count, const char* what, ScalarArray& out) {
   for (std::uint64_t k = 0; k < count; ++k) {
     SHATTER_TRY(v, read_scalar(b, t, what));
-    if (v->is_int) out.ints.push_back(v->i);
-    else out.reals.push_back(v->d);
+    if (v->is_int)
+      out.ints.push_back(v->i);
+    else
+      out.reals.push_back(v->d);
   }
   return {};
 }

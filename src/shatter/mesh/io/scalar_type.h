@@ -52,8 +52,10 @@ struct ScalarArray {
   [[nodiscard]] std::size_t size() const { return integral ? ints.size() : reals.size(); }
   /// Room for n values in the vector that `integral` selects.
   void reserve(std::size_t n) {
-    if (integral) ints.reserve(n);
-    else reals.reserve(n);
+    if (integral)
+      ints.reserve(n);
+    else
+      reals.reserve(n);
   }
 };
 

@@ -175,8 +175,10 @@ Result<SurfaceReadResult> parse_obj(std::string_view bytes, const std::string& n
       Vec3 p;
       for (int k = 0; k < 3; ++k)
         if (!io::parse_double(tok[1 + k], p[k]))
-          return c.error_at(line, "expected a vertex coordinate (a finite number), found " + io::quote_token(tok[1 + k]));
-      if (s.positions.size() >= static_cast<std::size_t>(io::kMaxEntities)) return c.error_at(line, "too many vertices");
+          return c.error_at(line,
+                            "expected a vertex coordinate (a finite number), found " + io::quote_token(tok[1 + k]));
+      if (s.positions.size() >= static_cast<std::size_t>(io::kMaxEntities))
+        return c.error_at(line, "too many vertices");
       s.positions.push_back(p);
     } else if (tok[0] == "f") {
       face.clear();
@@ -264,11 +266,16 @@ Result<SurfaceReadResult> parse_ply(std::string_view bytes, const std::string& n
     if (tok[0] == "end_header") break;
     if (tok[0] == "comment" || tok[0] == "obj_info") continue;
     if (tok[0] == "format") {
-      if (tok.size() < 3 || tok[2] != "1.0") return c.error_at(line, "expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
-      if (tok[1] == "ascii") format = 0;
-      else if (tok[1] == "binary_little_endian") format = 1;
-      else if (tok[1] == "binary_big_endian") format = 2;
-      else return c.error_at(line, "unknown PLY format " + io::quote_token(tok[1]));
+      if (tok.size() < 3 || tok[2] != "1.0")
+        return c.error_at(line, "expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
+      if (tok[1] == "ascii")
+        format = 0;
+      else if (tok[1] == "binary_little_endian")
+        format = 1;
+      else if (tok[1] == "binary_big_endian")
+        format = 2;
+      else
+        return c.error_at(line, "unknown PLY format " + io::quote_token(tok[1]));
     } else if (tok[0] == "element") {
       if (tok.size() != 3) return c.error_at(line, "expected 'element <name> <count>'");
       PlyElement e;
@@ -315,8 +322,7 @@ Result<SurfaceReadResult> parse_ply(std::string_view bytes, const std::string& n
     std::int64_t min_row = 0;
     for (const PlyProperty& p : e.props)
       min_row += body.ascii() ? 2 : static_cast<std::int64_t>(io::scalar_size(p.is_list ? p.count_type : p.type));
-    if (e.count > 0 && min_row == 0)
-      return c.error_at(e.line, "element '" + e.name + "' has rows but no properties");
+    if (e.count > 0 && min_row == 0) return c.error_at(e.line, "element '" + e.name + "' has rows but no properties");
     if (e.count > 0 && e.count > (static_cast<std::int64_t>(body.remaining()) + 1) / min_row)
       return c.error_at(e.line, "element '" + e.name + "' count " + std::to_string(e.count) + " is larger than the " +
                                     std::to_string(body.remaining()) + " bytes that follow can hold");
@@ -327,10 +333,22 @@ Result<SurfaceReadResult> parse_ply(std::string_view bytes, const std::string& n
       for (std::size_t k = 0; k < e.props.size(); ++k) {
         const PlyProperty& p = e.props[k];
         const int* slot = nullptr;
-        if (p.name == "x") { ix = static_cast<int>(k); slot = &ix; }
-        if (p.name == "y") { iy = static_cast<int>(k); slot = &iy; }
-        if (p.name == "z") { iz = static_cast<int>(k); slot = &iz; }
-        if (p.name == "id") { iid = static_cast<int>(k); slot = &iid; }
+        if (p.name == "x") {
+          ix = static_cast<int>(k);
+          slot = &ix;
+        }
+        if (p.name == "y") {
+          iy = static_cast<int>(k);
+          slot = &iy;
+        }
+        if (p.name == "z") {
+          iz = static_cast<int>(k);
+          slot = &iz;
+        }
+        if (p.name == "id") {
+          iid = static_cast<int>(k);
+          slot = &iid;
+        }
         if (slot && p.is_list) return c.error_at(e.line, "vertex property '" + p.name + "' must not be a list");
       }
       if (ix < 0 || iy < 0 || iz < 0) return c.error_at(e.line, "the vertex element needs properties x, y and z");
@@ -427,14 +445,17 @@ Result<void> write_ply(std::ostream& out, const TriSurface& surface, const Surfa
   s += " 1.0\nelement vertex " + std::to_string(surface.positions.size()) +
        "\nproperty double x\nproperty double y\nproperty double z\n";
   if (ids) s += ids_fit_int ? "property int id\n" : "property int64 id\n";
-  s += "element face " + std::to_string(surface.triangles.size()) + "\nproperty list uchar int vertex_indices\nend_header\n";
+  s += "element face " + std::to_string(surface.triangles.size()) +
+       "\nproperty list uchar int vertex_indices\nend_header\n";
   for (std::size_t i = 0; i < surface.positions.size(); ++i) {
     const Vec3& p = surface.positions[i];
     if (options.binary) {
       for (int k = 0; k < 3; ++k) io::append_binary<double>(s, p[k], false);
       if (ids) {
-        if (ids_fit_int) io::append_binary<std::int32_t>(s, static_cast<std::int32_t>(options.vertex_ids[i]), false);
-        else io::append_binary<std::int64_t>(s, options.vertex_ids[i], false);
+        if (ids_fit_int)
+          io::append_binary<std::int32_t>(s, static_cast<std::int32_t>(options.vertex_ids[i]), false);
+        else
+          io::append_binary<std::int64_t>(s, options.vertex_ids[i], false);
       }
     } else {
       for (int k = 0; k < 3; ++k) {
@@ -485,8 +506,10 @@ class Welder {
   }
   void triangle(const Vec3& a, const Vec3& b, const Vec3& c) {
     const TriIndices t{add(a), add(b), add(c)};
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) ++degenerate;
-    else s_.triangles.push_back(t);
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
+      ++degenerate;
+    else
+      s_.triangles.push_back(t);
   }
   std::int64_t degenerate = 0;
 
@@ -524,8 +547,9 @@ Result<SurfaceReadResult> parse_stl_binary(std::string_view bytes, const std::st
     for (auto& p : v)
       for (int k = 0; k < 3; ++k) {
         SHATTER_TRY(x, b.f32("vertex coordinate"));
-        if (!std::isfinite(*x)) return offset_error(name, static_cast<std::int64_t>(b.position()) - 4,
-                                                    "expected a vertex coordinate (a finite number)");
+        if (!std::isfinite(*x))
+          return offset_error(name, static_cast<std::int64_t>(b.position()) - 4,
+                              "expected a vertex coordinate (a finite number)");
         p[k] = *x;
       }
     SHATTER_TRY(attr, b.u16("attribute byte count"));
@@ -572,7 +596,8 @@ Result<SurfaceReadResult> parse_stl_ascii(std::string_view bytes, const std::str
         const std::string_view v = c.next_token();
         if (io::iequals(v, "endloop")) break;
         if (!io::iequals(v, "vertex"))
-          return c.error(v.empty() ? std::string("file ends inside a facet") : "expected 'vertex' or 'endloop', found " + io::quote_token(v));
+          return c.error(v.empty() ? std::string("file ends inside a facet")
+                                   : "expected 'vertex' or 'endloop', found " + io::quote_token(v));
         Vec3 p;
         for (int k = 0; k < 3; ++k) {
           SHATTER_TRY(x, c.next_double("vertex coordinate"));
@@ -584,7 +609,8 @@ Result<SurfaceReadResult> parse_stl_ascii(std::string_view bytes, const std::str
       if (loop.size() < 3) return c.error("a facet needs at least 3 vertices, found " + std::to_string(loop.size()));
       if (loop.size() > 3) ++polygons;
       for (std::size_t k = 1; k + 1 < loop.size(); ++k) weld.triangle(loop[0], loop[k], loop[k + 1]);
-      if (result.surface.triangles.size() > static_cast<std::size_t>(io::kMaxEntities)) return c.error("too many triangles");
+      if (result.surface.triangles.size() > static_cast<std::size_t>(io::kMaxEntities))
+        return c.error("too many triangles");
     }
   }
   if (solids == 0) return c.error("empty file: expected 'solid'");
@@ -606,7 +632,8 @@ Result<SurfaceReadResult> parse_stl(std::string_view bytes, const std::string& n
   }
   std::string_view head = bytes;
   if (head.size() >= 3 && head.substr(0, 3) == "\xEF\xBB\xBF") head.remove_prefix(3);
-  while (!head.empty() && (head[0] == ' ' || head[0] == '\t' || head[0] == '\r' || head[0] == '\n')) head.remove_prefix(1);
+  while (!head.empty() && (head[0] == ' ' || head[0] == '\t' || head[0] == '\r' || head[0] == '\n'))
+    head.remove_prefix(1);
   const bool starts_solid = head.size() >= 5 && io::iequals(head.substr(0, 5), "solid");
   if (starts_solid && bytes.find('\0') == std::string_view::npos) return parse_stl_ascii(bytes, name);
   return parse_stl_binary(bytes, name);

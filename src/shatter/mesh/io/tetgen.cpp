@@ -5,8 +5,8 @@
 #include <string>
 
 #include "shatter/mesh/io/io_util.h"
-#include "shatter/mesh/io/mesh_io_util.h"
 #include "shatter/mesh/io/mesh_io.h"
+#include "shatter/mesh/io/mesh_io_util.h"
 #include "shatter/mesh/io/text_cursor.h"
 
 namespace shatter {
@@ -44,7 +44,8 @@ Result<std::int64_t> row_int(const TextCursor& c, const Row& row, std::size_t k,
     return c.error_at(row.line, std::string("line ends where ") + what + " (an integer) was expected");
   std::int64_t v = 0;
   if (!io::parse_int(row.tokens[k], v))
-    return c.error_at(row.line, std::string("expected ") + what + " (an integer), found " + io::quote_token(row.tokens[k]));
+    return c.error_at(row.line,
+                      std::string("expected ") + what + " (an integer), found " + io::quote_token(row.tokens[k]));
   if (v < lo || v > hi)
     return c.error_at(row.line, std::string("expected ") + what + " in [" + std::to_string(lo) + ", " +
                                     std::to_string(hi) + "], found " + std::to_string(v));
@@ -56,7 +57,8 @@ Result<double> row_double(const TextCursor& c, const Row& row, std::size_t k, co
     return c.error_at(row.line, std::string("line ends where ") + what + " (a number) was expected");
   double v = 0;
   if (!io::parse_double(row.tokens[k], v))
-    return c.error_at(row.line, std::string("expected ") + what + " (a finite number), found " + io::quote_token(row.tokens[k]));
+    return c.error_at(row.line,
+                      std::string("expected ") + what + " (a finite number), found " + io::quote_token(row.tokens[k]));
   return v;
 }
 
@@ -144,7 +146,8 @@ Result<MeshReadResult> parse_tetgen(std::string_view node_bytes, const std::stri
   std::int64_t per_tet = 4, num_tet_attr = 0;
   if (row.tokens.size() > 1) {
     SHATTER_TRY(k, row_int(ec, row, 1, "nodes per tetrahedron", 4, 10));
-    if (*k != 4 && *k != 10) return ec.error_at(row.line, "expected nodes per tetrahedron 4 or 10, found " + std::to_string(*k));
+    if (*k != 4 && *k != 10)
+      return ec.error_at(row.line, "expected nodes per tetrahedron 4 or 10, found " + std::to_string(*k));
     per_tet = *k;
   }
   if (row.tokens.size() > 2) {
@@ -167,8 +170,9 @@ Result<MeshReadResult> parse_tetgen(std::string_view node_bytes, const std::stri
       SHATTER_TRY(v, row_int(ec, row, static_cast<std::size_t>(1 + k), "node number",
                              std::numeric_limits<std::int64_t>::min(), std::numeric_limits<std::int64_t>::max()));
       const auto idx = node_index.find(*v);
-      if (!idx) return ec.error_at(row.line, "tetrahedron " + std::to_string(*id) + " uses point " +
-                                                 std::to_string(*v) + ", which " + node_name + " does not define");
+      if (!idx)
+        return ec.error_at(row.line, "tetrahedron " + std::to_string(*id) + " uses point " + std::to_string(*v) +
+                                         ", which " + node_name + " does not define");
       if (k < 4) {
         t[k] = *idx;
         corner[*idx] = true;
@@ -189,14 +193,16 @@ Result<MeshReadResult> parse_tetgen(std::string_view node_bytes, const std::stri
     }
     if (row.tokens.size() > static_cast<std::size_t>(1 + per_tet + num_tet_attr))
       return ec.error_at(row.line, "unexpected " + io::quote_token(row.tokens[1 + per_tet + num_tet_attr]) +
-                                       " after the tetrahedron's " + std::to_string(1 + per_tet + num_tet_attr) + " values");
+                                       " after the tetrahedron's " + std::to_string(1 + per_tet + num_tet_attr) +
+                                       " values");
     mesh.tets.push_back(t);
     mesh.tet_ids.push_back(*id);
   }
   if (next_row(ec, row))
     return ec.error_at(row.line, "unexpected " + io::quote_token(row.tokens[0]) + " after the " + std::to_string(m) +
                                      " tetrahedra the header announced");
-  if (num_tet_attr > 1) result.skipped.push_back(std::to_string(num_tet_attr - 1) + " extra region attribute(s) per tetrahedron");
+  if (num_tet_attr > 1)
+    result.skipped.push_back(std::to_string(num_tet_attr - 1) + " extra region attribute(s) per tetrahedron");
   if (per_tet == 10) {
     // Keep the corners; drop the nodes only the quadratic tets used as mid-edge nodes.
     const std::size_t dropped = io::remove_midside_nodes(mesh, corner, midside);

@@ -98,7 +98,8 @@ Result<double> TextCursor::next_double(const char* what, char comment_char) {
   const std::string_view t = next_token(comment_char);
   if (t.empty()) return error(std::string("file ends where ") + what + " (a number) was expected");
   double v = 0;
-  if (!parse_double(t, v)) return error(std::string("expected ") + what + " (a finite number), found " + quote_token(t));
+  if (!parse_double(t, v))
+    return error(std::string("expected ") + what + " (a finite number), found " + quote_token(t));
   return v;
 }
 

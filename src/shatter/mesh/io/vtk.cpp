@@ -49,7 +49,8 @@ std::string encode_name(std::string_view s) {
   std::string r;
   for (char ch : s) {
     const unsigned char c = static_cast<unsigned char>(ch);
-    if ((c >= '0' && c <= '9') || (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_' || c == '-' || c == '.' || c == ':') {
+    if ((c >= '0' && c <= '9') || (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_' || c == '-' ||
+        c == '.' || c == ':') {
       r += ch;
     } else {
       static const char* hex = "0123456789ABCDEF";
@@ -70,7 +71,8 @@ class VtkReader {
     const std::string_view header = c_.next_line();
     const std::string_view magic = "# vtk DataFile Version";
     if (header.size() < magic.size() || io::to_lower(header.substr(0, magic.size())) != io::to_lower(magic))
-      return c_.error_at(1, "not a legacy VTK file: expected '# vtk DataFile Version', found " + io::quote_token(header));
+      return c_.error_at(1,
+                         "not a legacy VTK file: expected '# vtk DataFile Version', found " + io::quote_token(header));
     std::string_view v = header.substr(magic.size());
     while (!v.empty() && (v.front() == ' ' || v.front() == '\t')) v.remove_prefix(1);
     while (!v.empty() && (v.back() == ' ' || v.back() == '\t')) v.remove_suffix(1);
@@ -78,7 +80,8 @@ class VtkReader {
     if (v == "5.1") {
       v51_ = true;
     } else if (!(v == "1.0" || v == "2.0" || v == "3.0" || v == "4.0" || v == "4.1" || v == "4.2")) {
-      return c_.error_at(1, "unsupported legacy VTK version " + io::quote_token(v) + " (up to 4.2 and 5.1 are supported)");
+      return c_.error_at(1,
+                         "unsupported legacy VTK version " + io::quote_token(v) + " (up to 4.2 and 5.1 are supported)");
     }
     if (c_.at_end()) return c_.error("file ends where the title line was expected");
     (void)c_.next_line();  // title
@@ -143,7 +146,9 @@ class VtkReader {
   Result<void> start_binary() {
     c_.skip_blanks();
     if (c_.at_end()) return c_.error("file ends where binary data was expected");
-    if (c_.rest()[0] != '\n') return c_.error("expected the end of the line before binary data, found " + io::quote_token(c_.rest().substr(0, 8)));
+    if (c_.rest()[0] != '\n')
+      return c_.error("expected the end of the line before binary data, found " +
+                      io::quote_token(c_.rest().substr(0, 8)));
     (void)c_.take_bytes(1, "newline");
     return {};
   }
@@ -207,7 +212,8 @@ class VtkReader {
     if (have_points_) return c_.error("second POINTS section");
     have_points_ = true;
     SHATTER_TRY(n, c_.next_int("point count"));
-    if (*n < 0 || *n > std::numeric_limits<Index>::max()) return c_.error("point count " + std::to_string(*n) + " out of range");
+    if (*n < 0 || *n > std::numeric_limits<Index>::max())
+      return c_.error("point count " + std::to_string(*n) + " out of range");
     SHATTER_TRY(type, read_type("POINTS"));
     if (*n > std::numeric_limits<std::int64_t>::max() / 3) return c_.error("point count too large");
     const std::int64_t line = c_.line();
@@ -217,7 +223,8 @@ class VtkReader {
       for (int k = 0; k < 3; ++k) {
         const std::size_t j = static_cast<std::size_t>(3 * i + k);
         const double x = a->integral ? static_cast<double>(a->ints[j]) : a->reals[j];
-        if (!std::isfinite(x)) return c_.error_at(line, "point " + std::to_string(i) + " has a coordinate that is not finite");
+        if (!std::isfinite(x))
+          return c_.error_at(line, "point " + std::to_string(i) + " has a coordinate that is not finite");
         positions_[static_cast<std::size_t>(i)][k] = x;
       }
     return {};
@@ -241,30 +248,37 @@ class VtkReader {
       SHATTER_TRY(conn, read_values(*b, *ct, "cell connectivity", true));
       offsets_ = std::move(offsets->ints);
       if (offsets_.empty()) offsets_.push_back(0);
-      if (offsets_.front() != 0) return c_.error("first cell offset must be 0, found " + std::to_string(offsets_.front()));
+      if (offsets_.front() != 0)
+        return c_.error("first cell offset must be 0, found " + std::to_string(offsets_.front()));
       for (std::size_t i = 1; i < offsets_.size(); ++i)
         if (offsets_[i] < offsets_[i - 1]) return c_.error("cell offsets decrease at cell " + std::to_string(i - 1));
       if (offsets_.back() != *b)
-        return c_.error("last cell offset " + std::to_string(offsets_.back()) + " differs from the connectivity size " + std::to_string(*b));
+        return c_.error("last cell offset " + std::to_string(offsets_.back()) + " differs from the connectivity size " +
+                        std::to_string(*b));
       conn_ = std::move(conn->ints);
       return {};
     }
     // CELLS <#cells> <size>, then per cell: k i1 .. ik.
-    if (*a > *b) return c_.error("CELLS: " + std::to_string(*a) + " cells cannot fit in a list of " + std::to_string(*b) + " values");
+    if (*a > *b)
+      return c_.error("CELLS: " + std::to_string(*a) + " cells cannot fit in a list of " + std::to_string(*b) +
+                      " values");
     SHATTER_TRY(list, read_values(*b, ScalarType::i32, "cell list", true));
     offsets_.reserve(static_cast<std::size_t>(*a) + 1);
     offsets_.push_back(0);
     conn_.reserve(static_cast<std::size_t>(*b - *a));
     std::size_t p = 0;
     for (std::int64_t i = 0; i < *a; ++i) {
-      if (p >= list->ints.size()) return c_.error("CELLS list ends at cell " + std::to_string(i) + " of " + std::to_string(*a));
+      if (p >= list->ints.size())
+        return c_.error("CELLS list ends at cell " + std::to_string(i) + " of " + std::to_string(*a));
       const std::int64_t k = list->ints[p++];
       if (k < 0 || static_cast<std::uint64_t>(k) > list->ints.size() - p)
-        return c_.error("cell " + std::to_string(i) + " declares " + std::to_string(k) + " points, beyond the CELLS list");
+        return c_.error("cell " + std::to_string(i) + " declares " + std::to_string(k) +
+                        " points, beyond the CELLS list");
       for (std::int64_t j = 0; j < k; ++j) conn_.push_back(list->ints[p++]);
       offsets_.push_back(static_cast<std::int64_t>(conn_.size()));
     }
-    if (p != list->ints.size()) return c_.error("CELLS list size " + std::to_string(*b) + " does not match its " + std::to_string(*a) + " cells");
+    if (p != list->ints.size())
+      return c_.error("CELLS list size " + std::to_string(*b) + " does not match its " + std::to_string(*a) + " cells");
     return {};
   }
 
@@ -279,7 +293,8 @@ class VtkReader {
 
   Result<void> check_target(std::int64_t tuples) {
     if (target_ == 0) return c_.error("data array outside POINT_DATA / CELL_DATA");
-    if (tuples != target_count_) return c_.error("array has " + std::to_string(tuples) + " tuples, expected " + std::to_string(target_count_));
+    if (tuples != target_count_)
+      return c_.error("array has " + std::to_string(tuples) + " tuples, expected " + std::to_string(target_count_));
     return {};
   }
 
@@ -290,11 +305,15 @@ class VtkReader {
     const std::int64_t line = c_.line();
     int slot = 0;  // 1 node_id, 2 node_tag, 3 tet_id, 4 tet tag
     if (components == 1 && target_ == 1) {
-      if (name == "node_id") slot = 1;
-      else if (name == "node_tag") slot = 2;
+      if (name == "node_id")
+        slot = 1;
+      else if (name == "node_tag")
+        slot = 2;
     } else if (components == 1 && target_ == 2) {
-      if (name == "tet_id") slot = 3;
-      else if (name == "tag" || name == "tet_tag" || name == "gmsh:physical" || name == "medit:ref") slot = 4;
+      if (name == "tet_id")
+        slot = 3;
+      else if (name == "tag" || name == "tet_tag" || name == "gmsh:physical" || name == "medit:ref")
+        slot = 4;
     }
     SHATTER_TRY(a, read_values(tuples * components, type, "array values", slot != 0));
     if (slot == 0) return {};
@@ -305,14 +324,16 @@ class VtkReader {
       v.reserve(a->reals.size());
       for (double x : a->reals) {
         if (!(std::fabs(x) <= 9.0e15) || x != std::floor(x))
-          return c_.error_at(line, "array " + io::quote_token(name) + " holds the non-integer value " + std::to_string(x));
+          return c_.error_at(line,
+                             "array " + io::quote_token(name) + " holds the non-integer value " + std::to_string(x));
         v.push_back(static_cast<std::int64_t>(x));
       }
     }
     if (slot == 2 || slot == 4)
       for (std::int64_t x : v)
         if (x < std::numeric_limits<std::int32_t>::min() || x > std::numeric_limits<std::int32_t>::max())
-          return c_.error_at(line, "array " + io::quote_token(name) + ": tag " + std::to_string(x) + " does not fit 32 bits");
+          return c_.error_at(line,
+                             "array " + io::quote_token(name) + ": tag " + std::to_string(x) + " does not fit 32 bits");
     (slot == 1 ? node_id_ : slot == 2 ? node_tag_ : slot == 3 ? tet_id_ : tet_tag_) = std::move(v);
     return {};
   }
@@ -362,7 +383,8 @@ class VtkReader {
   Result<void> read_field() {
     (void)c_.next_token();  // field name
     SHATTER_TRY(n, c_.next_int("field array count"));
-    if (*n < 0 || static_cast<std::uint64_t>(*n) > c_.remaining() / 8) return c_.error("bad field array count " + std::to_string(*n));
+    if (*n < 0 || static_cast<std::uint64_t>(*n) > c_.remaining() / 8)
+      return c_.error("bad field array count " + std::to_string(*n));
     const int saved_target = target_;
     const std::int64_t saved_count = target_count_;
     for (std::int64_t i = 0; i < *n; ++i) {
@@ -428,7 +450,9 @@ class VtkReader {
         ++skipped[type];
         continue;
       }
-      if (e - b != 4) return c_.error("cell " + std::to_string(i) + " is a tetrahedron (type 10) with " + std::to_string(e - b) + " points");
+      if (e - b != 4)
+        return c_.error("cell " + std::to_string(i) + " is a tetrahedron (type 10) with " + std::to_string(e - b) +
+                        " points");
       TetIndices t;
       for (int k = 0; k < 4; ++k) {
         const std::int64_t v = conn_[static_cast<std::size_t>(b + k)];
@@ -437,7 +461,8 @@ class VtkReader {
                           std::to_string(np) + " points");
         t[k] = static_cast<Index>(v);
       }
-      if (m.tets.size() >= static_cast<std::size_t>(std::numeric_limits<Index>::max())) return c_.error("more than 2^31-1 tetrahedra");
+      if (m.tets.size() >= static_cast<std::size_t>(std::numeric_limits<Index>::max()))
+        return c_.error("more than 2^31-1 tetrahedra");
       m.tets.push_back(t);
       tet_cells.push_back(i);
     }
@@ -449,17 +474,30 @@ class VtkReader {
     if (!tet_tag_.empty())
       for (std::size_t i : tet_cells) m.tet_tags.push_back(static_cast<std::int32_t>(tet_tag_[i]));
     static const std::map<std::int64_t, std::pair<const char*, const char*>> names = {
-        {1, {"vertex", "vertices"}},         {2, {"poly-vertex", "poly-vertices"}},   {3, {"line", "lines"}},
-        {4, {"polyline", "polylines"}},      {5, {"triangle", "triangles"}},          {6, {"triangle strip", "triangle strips"}},
-        {7, {"polygon", "polygons"}},        {8, {"pixel", "pixels"}},                {9, {"quad", "quads"}},
-        {11, {"voxel", "voxels"}},           {12, {"hexahedron", "hexahedra"}},       {13, {"wedge", "wedges"}},
-        {14, {"pyramid", "pyramids"}},       {21, {"quadratic edge", "quadratic edges"}}, {22, {"quadratic triangle", "quadratic triangles"}},
-        {24, {"quadratic tetrahedron", "quadratic tetrahedra"}}, {42, {"polyhedron", "polyhedra"}},
+        {1, {"vertex", "vertices"}},
+        {2, {"poly-vertex", "poly-vertices"}},
+        {3, {"line", "lines"}},
+        {4, {"polyline", "polylines"}},
+        {5, {"triangle", "triangles"}},
+        {6, {"triangle strip", "triangle strips"}},
+        {7, {"polygon", "polygons"}},
+        {8, {"pixel", "pixels"}},
+        {9, {"quad", "quads"}},
+        {11, {"voxel", "voxels"}},
+        {12, {"hexahedron", "hexahedra"}},
+        {13, {"wedge", "wedges"}},
+        {14, {"pyramid", "pyramids"}},
+        {21, {"quadratic edge", "quadratic edges"}},
+        {22, {"quadratic triangle", "quadratic triangles"}},
+        {24, {"quadratic tetrahedron", "quadratic tetrahedra"}},
+        {42, {"polyhedron", "polyhedra"}},
     };
     for (const auto& [type, n] : skipped) {
       const auto it = names.find(type);
-      out.skipped.push_back(it != names.end() ? io::count_phrase(n, it->second.first, it->second.second) + " (vtk type " + std::to_string(type) + ")"
-                                              : io::count_phrase(n, "cell", "cells") + " of vtk type " + std::to_string(type));
+      out.skipped.push_back(it != names.end()
+                                ? io::count_phrase(n, it->second.first, it->second.second) + " (vtk type " +
+                                      std::to_string(type) + ")"
+                                : io::count_phrase(n, "cell", "cells") + " of vtk type " + std::to_string(type));
     }
     if (!skipped.empty()) {
       const Index dropped = io::drop_unused_nodes(m);
@@ -499,21 +537,30 @@ Result<void> write_vtk(std::ostream& out, const TetMesh& mesh, const MeshWriteOp
   const bool bin = options.binary;
   const Index nn = mesh.num_nodes(), ne = mesh.num_tets();
   auto bad_size = [](const char* what, std::size_t got, std::size_t want) {
-    return make_error(std::string("write_vtk: ") + what + " has " + std::to_string(got) + " values, expected " + std::to_string(want));
+    return make_error(std::string("write_vtk: ") + what + " has " + std::to_string(got) + " values, expected " +
+                      std::to_string(want));
   };
-  if (!mesh.node_ids.empty() && mesh.node_ids.size() != static_cast<std::size_t>(nn)) return bad_size("node_ids", mesh.node_ids.size(), nn);
-  if (!mesh.node_tags.empty() && mesh.node_tags.size() != static_cast<std::size_t>(nn)) return bad_size("node_tags", mesh.node_tags.size(), nn);
-  if (!mesh.tet_ids.empty() && mesh.tet_ids.size() != static_cast<std::size_t>(ne)) return bad_size("tet_ids", mesh.tet_ids.size(), ne);
-  if (!mesh.tet_tags.empty() && mesh.tet_tags.size() != static_cast<std::size_t>(ne)) return bad_size("tet_tags", mesh.tet_tags.size(), ne);
+  if (!mesh.node_ids.empty() && mesh.node_ids.size() != static_cast<std::size_t>(nn))
+    return bad_size("node_ids", mesh.node_ids.size(), nn);
+  if (!mesh.node_tags.empty() && mesh.node_tags.size() != static_cast<std::size_t>(nn))
+    return bad_size("node_tags", mesh.node_tags.size(), nn);
+  if (!mesh.tet_ids.empty() && mesh.tet_ids.size() != static_cast<std::size_t>(ne))
+    return bad_size("tet_ids", mesh.tet_ids.size(), ne);
+  if (!mesh.tet_tags.empty() && mesh.tet_tags.size() != static_cast<std::size_t>(ne))
+    return bad_size("tet_tags", mesh.tet_tags.size(), ne);
   for (const MeshField& f : options.fields.node_fields)
     if (f.components < 1 || f.values.size() != static_cast<std::size_t>(nn) * static_cast<std::size_t>(f.components))
-      return bad_size(("node field " + f.name).c_str(), f.values.size(), static_cast<std::size_t>(nn) * static_cast<std::size_t>(std::max(f.components, 1)));
+      return bad_size(("node field " + f.name).c_str(), f.values.size(),
+                      static_cast<std::size_t>(nn) * static_cast<std::size_t>(std::max(f.components, 1)));
   for (const MeshField& f : options.fields.tet_fields)
     if (f.components < 1 || f.values.size() != static_cast<std::size_t>(ne) * static_cast<std::size_t>(f.components))
-      return bad_size(("tet field " + f.name).c_str(), f.values.size(), static_cast<std::size_t>(ne) * static_cast<std::size_t>(std::max(f.components, 1)));
+      return bad_size(("tet field " + f.name).c_str(), f.values.size(),
+                      static_cast<std::size_t>(ne) * static_cast<std::size_t>(std::max(f.components, 1)));
   for (Index e = 0; e < ne; ++e)
     for (Index v : mesh.tets[e])
-      if (v < 0 || v >= nn) return make_error("write_vtk: tet " + std::to_string(mesh.tet_id(e)) + " has node index " + std::to_string(v) + " out of range");
+      if (v < 0 || v >= nn)
+        return make_error("write_vtk: tet " + std::to_string(mesh.tet_id(e)) + " has node index " + std::to_string(v) +
+                          " out of range");
 
   io::WriteBuffer w(out);
   auto end_binary = [&] {
@@ -523,8 +570,10 @@ Result<void> write_vtk(std::ostream& out, const TetMesh& mesh, const MeshWriteOp
     std::size_t i = 0;
     for (const auto v : values) {
       if (bin) {
-        if (as64) w.raw(static_cast<std::int64_t>(v), true);
-        else w.raw(static_cast<std::int32_t>(v), true);
+        if (as64)
+          w.raw(static_cast<std::int64_t>(v), true);
+        else
+          w.raw(static_cast<std::int32_t>(v), true);
       } else {
         w.integer(static_cast<std::int64_t>(v));
         w << (++i % 16 == 0 ? '\n' : ' ');
@@ -583,7 +632,8 @@ Result<void> write_vtk(std::ostream& out, const TetMesh& mesh, const MeshWriteOp
     }
   };
 
-  w << "# vtk DataFile Version 4.2\nshatter tetrahedral mesh\n" << (bin ? "BINARY\n" : "ASCII\n") << "DATASET UNSTRUCTURED_GRID\n";
+  w << "# vtk DataFile Version 4.2\nshatter tetrahedral mesh\n"
+    << (bin ? "BINARY\n" : "ASCII\n") << "DATASET UNSTRUCTURED_GRID\n";
   w << "POINTS ";
   w.integer(nn);
   w << " double\n";

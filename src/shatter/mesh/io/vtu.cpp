@@ -37,39 +37,52 @@ class VtuReader {
     while (p < bytes_.size() && (bytes_[p] == ' ' || bytes_[p] == '\n' || bytes_[p] == '\r' || bytes_[p] == '\t')) ++p;
     if (p >= bytes_.size()) return line_error(name_, 1, "empty file: expected a VTK XML file");
     if (const std::size_t at = bytes_.find("<AppendedData"); at != std::string_view::npos)
-      return line_error(name_, io::line_of(bytes_, at), "VTU with AppendedData is not supported (write inline ascii or binary arrays)");
+      return line_error(name_, io::line_of(bytes_, at),
+                        "VTU with AppendedData is not supported (write inline ascii or binary arrays)");
     SHATTER_TRY(parsed, io::parse_xml(bytes_, name_));
     doc_ = std::move(*parsed);
     const XmlElement& root = doc_.elements[0];
-    if (root.name != "VTKFile") return err(root, "expected the root element <VTKFile>, found <" + std::string(root.name) + ">");
+    if (root.name != "VTKFile")
+      return err(root, "expected the root element <VTKFile>, found <" + std::string(root.name) + ">");
     const std::string* type = root.attribute("type");
     if (!type || *type != "UnstructuredGrid")
-      return err(root, "expected VTKFile type=\"UnstructuredGrid\", found " + io::quote_token(type ? *type : std::string()));
-    if (const std::string* c = root.attribute("compressor"); c && !c->empty()) return err(root, "compressed VTU not supported (" + *c + ")");
+      return err(root,
+                 "expected VTKFile type=\"UnstructuredGrid\", found " + io::quote_token(type ? *type : std::string()));
+    if (const std::string* c = root.attribute("compressor"); c && !c->empty())
+      return err(root, "compressed VTU not supported (" + *c + ")");
     if (const std::string* bo = root.attribute("byte_order")) {
-      if (*bo == "BigEndian") big_endian_ = true;
-      else if (*bo != "LittleEndian") return err(root, "unknown byte_order " + io::quote_token(*bo));
+      if (*bo == "BigEndian")
+        big_endian_ = true;
+      else if (*bo != "LittleEndian")
+        return err(root, "unknown byte_order " + io::quote_token(*bo));
     }
     if (const std::string* ht = root.attribute("header_type")) {
-      if (*ht == "UInt64") header_size_ = 8;
-      else if (*ht != "UInt32") return err(root, "unknown header_type " + io::quote_token(*ht));
+      if (*ht == "UInt64")
+        header_size_ = 8;
+      else if (*ht != "UInt32")
+        return err(root, "unknown header_type " + io::quote_token(*ht));
     }
     const std::vector<int> grids = doc_.children(0, "UnstructuredGrid");
     if (grids.size() != 1) return err(root, "expected one <UnstructuredGrid> element");
     const std::vector<int> pieces = doc_.children(grids[0], "Piece");
-    if (pieces.empty()) return err(doc_.elements[static_cast<std::size_t>(grids[0])], "no <Piece> in <UnstructuredGrid>");
-    if (pieces.size() > 1) return err(doc_.elements[static_cast<std::size_t>(pieces[1])], "only one <Piece> is supported");
+    if (pieces.empty())
+      return err(doc_.elements[static_cast<std::size_t>(grids[0])], "no <Piece> in <UnstructuredGrid>");
+    if (pieces.size() > 1)
+      return err(doc_.elements[static_cast<std::size_t>(pieces[1])], "only one <Piece> is supported");
     return read_piece(pieces[0]);
   }
 
  private:
-  Error err(const XmlElement& e, const std::string& msg) const { return line_error(name_, io::line_of(bytes_, e.offset), msg); }
+  Error err(const XmlElement& e, const std::string& msg) const {
+    return line_error(name_, io::line_of(bytes_, e.offset), msg);
+  }
 
   Result<std::int64_t> count_attribute(const XmlElement& e, const char* attr) {
     const std::string* s = e.attribute(attr);
     std::int64_t v = 0;
     if (!s || !io::parse_int(*s, v)) return err(e, std::string("expected an integer attribute ") + attr);
-    if (v < 0 || v > std::numeric_limits<Index>::max()) return err(e, std::string(attr) + " " + std::to_string(v) + " out of range");
+    if (v < 0 || v > std::numeric_limits<Index>::max())
+      return err(e, std::string(attr) + " " + std::to_string(v) + " out of range");
     return v;
   }
 
@@ -86,13 +99,16 @@ class VtuReader {
   Result<ScalarArray> read_array(const XmlElement& e, std::int64_t tuples, int expected_components, bool keep) {
     const std::string* tname = e.attribute("type");
     const auto type = tname ? io::scalar_type_from_name(io::ScalarNames::vtu, *tname) : std::nullopt;
-    if (!type) return err(e, "DataArray has an unknown or missing type " + io::quote_token(tname ? *tname : std::string()));
+    if (!type)
+      return err(e, "DataArray has an unknown or missing type " + io::quote_token(tname ? *tname : std::string()));
     const ScalarType t = *type;
     std::int64_t comps = 1;
     if (const std::string* nc = e.attribute("NumberOfComponents"))
-      if (!io::parse_int(*nc, comps) || comps < 1 || comps > 1024) return err(e, "bad NumberOfComponents " + io::quote_token(*nc));
+      if (!io::parse_int(*nc, comps) || comps < 1 || comps > 1024)
+        return err(e, "bad NumberOfComponents " + io::quote_token(*nc));
     if (expected_components > 0 && comps != expected_components)
-      return err(e, "expected NumberOfComponents=\"" + std::to_string(expected_components) + "\", found " + std::to_string(comps));
+      return err(e, "expected NumberOfComponents=\"" + std::to_string(expected_components) + "\", found " +
+                        std::to_string(comps));
     const std::uint64_t count = static_cast<std::uint64_t>(tuples) * static_cast<std::uint64_t>(comps);
     const std::string* fmt = e.attribute("format");
     const std::string format = fmt ? *fmt : "ascii";
@@ -100,7 +116,8 @@ class VtuReader {
     ScalarArray v;
     v.integral = !io::is_float(t);
     if (format == "ascii") {
-      if (count > content.size() / 2 + 1) return err(e, "DataArray holds fewer values than the " + std::to_string(count) + " expected");
+      if (count > content.size() / 2 + 1)
+        return err(e, "DataArray holds fewer values than the " + std::to_string(count) + " expected");
       if (!keep) return v;
       // Lines inside the content count from the DataArray's line.
       io::TextCursor c(content, name_);
@@ -120,7 +137,8 @@ class VtuReader {
           v.reals.push_back(*x);
         }
       }
-      if (!c.next_token().empty()) return fail(c.error("DataArray holds more than the " + std::to_string(count) + " values expected"));
+      if (!c.next_token().empty())
+        return fail(c.error("DataArray holds more than the " + std::to_string(count) + " values expected"));
       return v;
     }
     if (format == "appended") return err(e, "appended VTU data is not supported");
@@ -129,7 +147,8 @@ class VtuReader {
     std::size_t bad = 0;
     if (!io::base64_decode(content, raw, bad))
       return line_error(name_, io::line_of(bytes_, e.content_begin + bad), "invalid base64 in DataArray");
-    io::ByteCursor b(raw, name_ + " (decoded DataArray at line " + std::to_string(io::line_of(bytes_, e.offset)) + ")", 0, big_endian_);
+    io::ByteCursor b(raw, name_ + " (decoded DataArray at line " + std::to_string(io::line_of(bytes_, e.offset)) + ")",
+                     0, big_endian_);
     std::uint64_t nbytes = 0;
     if (header_size_ == 8) {
       SHATTER_TRY(h, b.u64("array byte count"));
@@ -141,7 +160,8 @@ class VtuReader {
     const std::size_t size = io::scalar_size(t);
     if (auto r = b.require(count, size, "array values"); !r) return r.error();
     if (nbytes != count * size)
-      return err(e, "DataArray header says " + std::to_string(nbytes) + " bytes, expected " + std::to_string(count * size));
+      return err(
+          e, "DataArray header says " + std::to_string(nbytes) + " bytes, expected " + std::to_string(count * size));
     if (!keep) return v;
     v.reserve(count);
     SHATTER_TRY(ok, io::read_scalars(b, t, count, "value", v));
@@ -154,7 +174,8 @@ class VtuReader {
     std::vector<std::int64_t> r;
     r.reserve(v->reals.size());
     for (double x : v->reals) {
-      if (!(std::fabs(x) <= 9.0e15) || x != std::floor(x)) return err(e, "expected integers, found " + std::to_string(x));
+      if (!(std::fabs(x) <= 9.0e15) || x != std::floor(x))
+        return err(e, "expected integers, found " + std::to_string(x));
       r.push_back(static_cast<std::int64_t>(x));
     }
     return r;
@@ -181,7 +202,8 @@ class VtuReader {
     const XmlElement& pa = doc_.elements[static_cast<std::size_t>(parr[0])];
     SHATTER_TRY(pv, read_array(pa, *np, 3, true));
     MeshReadResult out;
-    out.format = std::string("vtu ") + (pa.attribute("format") && *pa.attribute("format") == "binary" ? "binary" : "ascii");
+    out.format =
+        std::string("vtu ") + (pa.attribute("format") && *pa.attribute("format") == "binary" ? "binary" : "ascii");
     TetMesh& m = out.mesh;
     m.positions.resize(static_cast<std::size_t>(*np));
     for (std::int64_t i = 0; i < *np; ++i)
@@ -214,12 +236,15 @@ class VtuReader {
         ++skipped[(*types)[static_cast<std::size_t>(i)]];
         continue;
       }
-      if (e - b != 4) return err(*off_e, "cell " + std::to_string(i) + " is a tetrahedron (type 10) with " + std::to_string(e - b) + " points");
+      if (e - b != 4)
+        return err(*off_e, "cell " + std::to_string(i) + " is a tetrahedron (type 10) with " + std::to_string(e - b) +
+                               " points");
       TetIndices t;
       for (int k = 0; k < 4; ++k) {
         const std::int64_t v = (*conn)[static_cast<std::size_t>(b + k)];
         if (v < 0 || v >= *np)
-          return err(*conn_e, "cell " + std::to_string(i) + " references point " + std::to_string(v) + ", but there are " + std::to_string(*np) + " points");
+          return err(*conn_e, "cell " + std::to_string(i) + " references point " + std::to_string(v) +
+                                  ", but there are " + std::to_string(*np) + " points");
         t[k] = static_cast<Index>(v);
       }
       m.tets.push_back(t);
@@ -288,7 +313,8 @@ class ArrayWriter {
   ArrayWriter(io::WriteBuffer& w, bool binary) : w_(w), binary_(binary) {}
 
   template <class T, class Get>
-  void write(std::string_view indent, const char* type, std::string_view name, int components, std::size_t count, Get&& get) {
+  void write(std::string_view indent, const char* type, std::string_view name, int components, std::size_t count,
+             Get&& get) {
     w_ << indent << "<DataArray type=\"" << type << "\" Name=\"" << io::xml_escape(name) << '"';
     if (components != 1) {
       w_ << " NumberOfComponents=\"";
@@ -312,8 +338,10 @@ class ArrayWriter {
       for (std::size_t i = 0; i < count; ++i) {
         if (i > 0) w_ << ((i % 12 == 0) ? '\n' : ' ');
         if (i > 0 && i % 12 == 0) w_ << indent << "  ";
-        if constexpr (std::is_floating_point_v<T>) w_.number(get(i));
-        else w_.integer(static_cast<std::int64_t>(get(i)));
+        if constexpr (std::is_floating_point_v<T>)
+          w_.number(get(i));
+        else
+          w_.integer(static_cast<std::int64_t>(get(i)));
       }
     }
     w_ << '\n' << indent << "</DataArray>\n";
@@ -335,48 +363,69 @@ Result<void> write_vtu(std::ostream& out, const TetMesh& mesh, const MeshWriteOp
   static_assert(std::endian::native == std::endian::little, "the VTU writer assumes a little-endian machine");
   const Index nn = mesh.num_nodes(), ne = mesh.num_tets();
   auto bad_size = [](const std::string& what, std::size_t got, std::size_t want) {
-    return make_error("write_vtu: " + what + " has " + std::to_string(got) + " values, expected " + std::to_string(want));
+    return make_error("write_vtu: " + what + " has " + std::to_string(got) + " values, expected " +
+                      std::to_string(want));
   };
-  if (!mesh.node_ids.empty() && mesh.node_ids.size() != static_cast<std::size_t>(nn)) return bad_size("node_ids", mesh.node_ids.size(), nn);
-  if (!mesh.node_tags.empty() && mesh.node_tags.size() != static_cast<std::size_t>(nn)) return bad_size("node_tags", mesh.node_tags.size(), nn);
-  if (!mesh.tet_ids.empty() && mesh.tet_ids.size() != static_cast<std::size_t>(ne)) return bad_size("tet_ids", mesh.tet_ids.size(), ne);
-  if (!mesh.tet_tags.empty() && mesh.tet_tags.size() != static_cast<std::size_t>(ne)) return bad_size("tet_tags", mesh.tet_tags.size(), ne);
+  if (!mesh.node_ids.empty() && mesh.node_ids.size() != static_cast<std::size_t>(nn))
+    return bad_size("node_ids", mesh.node_ids.size(), nn);
+  if (!mesh.node_tags.empty() && mesh.node_tags.size() != static_cast<std::size_t>(nn))
+    return bad_size("node_tags", mesh.node_tags.size(), nn);
+  if (!mesh.tet_ids.empty() && mesh.tet_ids.size() != static_cast<std::size_t>(ne))
+    return bad_size("tet_ids", mesh.tet_ids.size(), ne);
+  if (!mesh.tet_tags.empty() && mesh.tet_tags.size() != static_cast<std::size_t>(ne))
+    return bad_size("tet_tags", mesh.tet_tags.size(), ne);
   for (const MeshField& f : options.fields.node_fields)
     if (f.components < 1 || f.values.size() != static_cast<std::size_t>(nn) * static_cast<std::size_t>(f.components))
-      return bad_size("node field " + f.name, f.values.size(), static_cast<std::size_t>(nn) * static_cast<std::size_t>(std::max(f.components, 1)));
+      return bad_size("node field " + f.name, f.values.size(),
+                      static_cast<std::size_t>(nn) * static_cast<std::size_t>(std::max(f.components, 1)));
   for (const MeshField& f : options.fields.tet_fields)
     if (f.components < 1 || f.values.size() != static_cast<std::size_t>(ne) * static_cast<std::size_t>(f.components))
-      return bad_size("tet field " + f.name, f.values.size(), static_cast<std::size_t>(ne) * static_cast<std::size_t>(std::max(f.components, 1)));
+      return bad_size("tet field " + f.name, f.values.size(),
+                      static_cast<std::size_t>(ne) * static_cast<std::size_t>(std::max(f.components, 1)));
   for (Index e = 0; e < ne; ++e)
     for (Index v : mesh.tets[e])
-      if (v < 0 || v >= nn) return make_error("write_vtu: tet " + std::to_string(mesh.tet_id(e)) + " has node index " + std::to_string(v) + " out of range");
+      if (v < 0 || v >= nn)
+        return make_error("write_vtu: tet " + std::to_string(mesh.tet_id(e)) + " has node index " + std::to_string(v) +
+                          " out of range");
 
   io::WriteBuffer w(out);
   ArrayWriter a(w, options.binary);
   const std::string_view in = "        ";
-  w << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n";
+  w << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+       "header_type=\"UInt64\">\n";
   w << "  <UnstructuredGrid>\n    <Piece NumberOfPoints=\"";
   w.integer(nn);
   w << "\" NumberOfCells=\"";
   w.integer(ne);
   w << "\">\n";
   w << "      <PointData>\n";
-  if (!mesh.node_ids.empty()) a.write<std::int64_t>(in, "Int64", "node_id", 1, mesh.node_ids.size(), [&](std::size_t i) { return mesh.node_ids[i]; });
-  if (!mesh.node_tags.empty()) a.write<std::int32_t>(in, "Int32", "node_tag", 1, mesh.node_tags.size(), [&](std::size_t i) { return mesh.node_tags[i]; });
+  if (!mesh.node_ids.empty())
+    a.write<std::int64_t>(in, "Int64", "node_id", 1, mesh.node_ids.size(),
+                          [&](std::size_t i) { return mesh.node_ids[i]; });
+  if (!mesh.node_tags.empty())
+    a.write<std::int32_t>(in, "Int32", "node_tag", 1, mesh.node_tags.size(),
+                          [&](std::size_t i) { return mesh.node_tags[i]; });
   for (const MeshField& f : options.fields.node_fields)
     a.write<double>(in, "Float64", f.name, f.components, f.values.size(), [&](std::size_t i) { return f.values[i]; });
   w << "      </PointData>\n      <CellData>\n";
-  if (!mesh.tet_ids.empty()) a.write<std::int64_t>(in, "Int64", "tet_id", 1, mesh.tet_ids.size(), [&](std::size_t i) { return mesh.tet_ids[i]; });
-  if (!mesh.tet_tags.empty()) a.write<std::int32_t>(in, "Int32", "tag", 1, mesh.tet_tags.size(), [&](std::size_t i) { return mesh.tet_tags[i]; });
+  if (!mesh.tet_ids.empty())
+    a.write<std::int64_t>(in, "Int64", "tet_id", 1, mesh.tet_ids.size(),
+                          [&](std::size_t i) { return mesh.tet_ids[i]; });
+  if (!mesh.tet_tags.empty())
+    a.write<std::int32_t>(in, "Int32", "tag", 1, mesh.tet_tags.size(), [&](std::size_t i) { return mesh.tet_tags[i]; });
   for (const MeshField& f : options.fields.tet_fields)
     a.write<double>(in, "Float64", f.name, f.components, f.values.size(), [&](std::size_t i) { return f.values[i]; });
   w << "      </CellData>\n      <Points>\n";
-  a.write<double>(in, "Float64", "Points", 3, static_cast<std::size_t>(nn) * 3, [&](std::size_t i) { return mesh.positions[i / 3][static_cast<Index>(i % 3)]; });
+  a.write<double>(in, "Float64", "Points", 3, static_cast<std::size_t>(nn) * 3,
+                  [&](std::size_t i) { return mesh.positions[i / 3][static_cast<Index>(i % 3)]; });
   w << "      </Points>\n      <Cells>\n";
   const std::size_t ne4 = static_cast<std::size_t>(ne) * 4;
-  a.write<std::int64_t>(in, "Int64", "connectivity", 1, ne4, [&](std::size_t i) { return std::int64_t{mesh.tets[i / 4][i % 4]}; });
-  a.write<std::int64_t>(in, "Int64", "offsets", 1, static_cast<std::size_t>(ne), [&](std::size_t i) { return static_cast<std::int64_t>(4 * (i + 1)); });
-  a.write<std::uint8_t>(in, "UInt8", "types", 1, static_cast<std::size_t>(ne), [](std::size_t) { return std::uint8_t{10}; });
+  a.write<std::int64_t>(in, "Int64", "connectivity", 1, ne4,
+                        [&](std::size_t i) { return std::int64_t{mesh.tets[i / 4][i % 4]}; });
+  a.write<std::int64_t>(in, "Int64", "offsets", 1, static_cast<std::size_t>(ne),
+                        [&](std::size_t i) { return static_cast<std::int64_t>(4 * (i + 1)); });
+  a.write<std::uint8_t>(in, "UInt8", "types", 1, static_cast<std::size_t>(ne),
+                        [](std::size_t) { return std::uint8_t{10}; });
   w << "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n";
   w.flush();
   if (!w.good()) return make_error("write_vtu: the output stream failed");

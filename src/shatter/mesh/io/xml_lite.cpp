@@ -26,20 +26,30 @@ bool decode_entities(std::string_view s, std::string& out) {
     const std::size_t semi = s.find(';', i);
     if (semi == std::string_view::npos || semi - i > 10) return false;
     const std::string_view ent = s.substr(i + 1, semi - i - 1);
-    if (ent == "lt") out += '<';
-    else if (ent == "gt") out += '>';
-    else if (ent == "amp") out += '&';
-    else if (ent == "quot") out += '"';
-    else if (ent == "apos") out += '\'';
+    if (ent == "lt")
+      out += '<';
+    else if (ent == "gt")
+      out += '>';
+    else if (ent == "amp")
+      out += '&';
+    else if (ent == "quot")
+      out += '"';
+    else if (ent == "apos")
+      out += '\'';
     else if (ent.size() >= 2 && ent[0] == '#') {
       std::int64_t v = 0;
       bool ok = false;
       if (ent[1] == 'x' || ent[1] == 'X') {
         ok = ent.size() > 2;
         for (char c : ent.substr(2)) {
-          const int d = c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
-          if (d < 0) ok = false;
-          else v = v * 16 + d;
+          const int d = c >= '0' && c <= '9'   ? c - '0'
+                        : c >= 'a' && c <= 'f' ? c - 'a' + 10
+                        : c >= 'A' && c <= 'F' ? c - 'A' + 10
+                                               : -1;
+          if (d < 0)
+            ok = false;
+          else
+            v = v * 16 + d;
         }
       } else {
         ok = parse_int(ent.substr(1), v);
@@ -102,7 +112,8 @@ Result<XmlDocument> parse_xml(std::string_view bytes, const std::string& name) {
       const std::size_t next = std::min(bytes.find('<', pos), bytes.size());
       if (stack.empty())
         for (std::size_t i = pos; i < next; ++i)
-          if (!is_space(bytes[i])) return err(i, "text outside the root element: " + quote_token(bytes.substr(i, next - i)));
+          if (!is_space(bytes[i]))
+            return err(i, "text outside the root element: " + quote_token(bytes.substr(i, next - i)));
       pos = next;
       continue;
     }
@@ -171,17 +182,21 @@ Result<XmlDocument> parse_xml(std::string_view bytes, const std::string& name) {
       const std::size_t attr_begin = p;
       while (p < bytes.size() && is_name_char(bytes[p])) ++p;
       const std::string_view attr = bytes.substr(attr_begin, p - attr_begin);
-      if (attr.empty()) return err(p, "unexpected character " + quote_token(bytes.substr(p, 1)) + " in tag <" + std::string(el.name) + ">");
+      if (attr.empty())
+        return err(
+            p, "unexpected character " + quote_token(bytes.substr(p, 1)) + " in tag <" + std::string(el.name) + ">");
       while (p < bytes.size() && is_space(bytes[p])) ++p;
       if (p >= bytes.size() || bytes[p] != '=') return err(p, "expected '=' after attribute " + quote_token(attr));
       ++p;
       while (p < bytes.size() && is_space(bytes[p])) ++p;
-      if (p >= bytes.size() || (bytes[p] != '"' && bytes[p] != '\'')) return err(p, "expected a quoted value for attribute " + quote_token(attr));
+      if (p >= bytes.size() || (bytes[p] != '"' && bytes[p] != '\''))
+        return err(p, "expected a quoted value for attribute " + quote_token(attr));
       const char quote = bytes[p++];
       const std::size_t value_end = bytes.find(quote, p);
       if (value_end == std::string_view::npos) return err(p, "unterminated value of attribute " + quote_token(attr));
       const std::string_view raw = bytes.substr(p, value_end - p);
-      if (raw.find('<') != std::string_view::npos) return err(p, "'<' inside the value of attribute " + quote_token(attr));
+      if (raw.find('<') != std::string_view::npos)
+        return err(p, "'<' inside the value of attribute " + quote_token(attr));
       XmlAttribute a;
       a.name = attr;
       if (!decode_entities(raw, a.value)) return err(p, "bad character reference in attribute " + quote_token(attr));
@@ -195,7 +210,8 @@ Result<XmlDocument> parse_xml(std::string_view bytes, const std::string& name) {
     if (!stack.empty()) doc.elements[static_cast<std::size_t>(stack.back())].child_indices.push_back(index);
     doc.elements.push_back(std::move(el));
     if (!self_closing) {
-      if (static_cast<int>(stack.size()) >= kMaxDepth) return err(pos, "elements nested deeper than " + std::to_string(kMaxDepth));
+      if (static_cast<int>(stack.size()) >= kMaxDepth)
+        return err(pos, "elements nested deeper than " + std::to_string(kMaxDepth));
       stack.push_back(index);
     } else if (stack.empty()) {
       root_closed = true;
@@ -203,7 +219,8 @@ Result<XmlDocument> parse_xml(std::string_view bytes, const std::string& name) {
     pos = p;
   }
   if (!stack.empty())
-    return err(bytes.size(), "file ends inside <" + std::string(doc.elements[static_cast<std::size_t>(stack.back())].name) + ">");
+    return err(bytes.size(),
+               "file ends inside <" + std::string(doc.elements[static_cast<std::size_t>(stack.back())].name) + ">");
   if (doc.elements.empty()) return err(pos, "no XML element in the file");
   return doc;
 }

@@ -20,9 +20,9 @@ struct XmlAttribute {
 struct XmlElement {
   std::string_view name;
   std::vector<XmlAttribute> attributes;
-  int parent = -1;                 ///< index in XmlDocument::elements, -1 for the root
-  std::size_t offset = 0;          ///< byte offset of its '<'
-  std::size_t content_begin = 0;   ///< byte range between the start and end tags
+  int parent = -1;                ///< index in XmlDocument::elements, -1 for the root
+  std::size_t offset = 0;         ///< byte offset of its '<'
+  std::size_t content_begin = 0;  ///< byte range between the start and end tags
   std::size_t content_end = 0;
   std::vector<int> child_indices;  ///< direct children, in document order
   /// The attribute's value, or nullptr.
