@@ -23,9 +23,12 @@
 #include "shatter/mesh/validate.h"
 
 // Meshing: shapes (signed distances), shape files, the meshers.
+#include "shatter/meshing/box_csg_mesher.h"
 #include "shatter/meshing/mesh_shape.h"
+#include "shatter/meshing/revolve_mesher.h"
 #include "shatter/meshing/sdf.h"
 #include "shatter/meshing/shape_json.h"
+#include "shatter/meshing/stuffing.h"
 #include "shatter/meshing/surface_sdf.h"
 
 // Finite elements: materials, constitutive models, tet kernels, the FEM model, stiffness.
@@ -45,8 +48,9 @@
 #include "shatter/solve/linear_solvers.h"
 #include "shatter/solve/static_solver.h"
 
-// Bodies: one body's model (constant) and state (changing).
+// Bodies: one body's model (constant) and state (changing); rigid-body integration.
 #include "shatter/rigid/body.h"
+#include "shatter/rigid/integrate.h"
 
 // Static analysis of a mesh under a load case, and its result files.
 #include "shatter/scene/static_analysis.h"

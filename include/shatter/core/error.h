@@ -27,22 +27,27 @@ struct Error {
 };
 
 /// Builders for the common cases.
-Error make_error(std::string message);
-Error file_error(std::string file, std::string message);
-Error line_error(std::string file, std::int64_t line, std::string message);
-Error offset_error(std::string file, std::int64_t offset, std::string message);
-Error field_error(std::string field, std::string message);
+Error make_error(std::string message);                                           ///< message only
+Error file_error(std::string file, std::string message);                         ///< with the file
+Error line_error(std::string file, std::int64_t line, std::string message);      ///< with file and 1-based line
+Error offset_error(std::string file, std::int64_t offset, std::string message);  ///< with file and byte offset
+Error field_error(std::string field, std::string message);                       ///< with the field (JSON path)
 
 /// Either a T or an Error. Check with ok() / operator bool before value().
 template <class T>
 class [[nodiscard]] Result {
  public:
-  Result(T value) : v_(std::in_place_index<0>, std::move(value)) {}      // NOLINT(implicit)
+  /// A success holding `value` (implicit, so a function can return a T).
+  Result(T value) : v_(std::in_place_index<0>, std::move(value)) {}  // NOLINT(implicit)
+  /// A failure holding `error` (implicit, so a function can return an Error).
   Result(Error error) : v_(std::in_place_index<1>, std::move(error)) {}  // NOLINT(implicit)
 
+  /// True when it holds a value.
   [[nodiscard]] bool ok() const { return v_.index() == 0; }
+  /// Same as ok().
   explicit operator bool() const { return ok(); }
 
+  /// The value; only when ok().
   T& value() & {
     SHATTER_ASSERT(ok());
     return std::get<0>(v_);
@@ -55,11 +60,14 @@ class [[nodiscard]] Result {
     SHATTER_ASSERT(ok());
     return std::get<0>(std::move(v_));
   }
+  /// Member access to the value; only when ok().
   T* operator->() { return &value(); }
   const T* operator->() const { return &value(); }
+  /// The value; only when ok().
   T& operator*() & { return value(); }
   const T& operator*() const& { return value(); }
 
+  /// The error; only when !ok().
   [[nodiscard]] const Error& error() const {
     SHATTER_ASSERT(!ok());
     return std::get<1>(v_);
@@ -77,10 +85,15 @@ class [[nodiscard]] Result {
 template <>
 class [[nodiscard]] Result<void> {
  public:
+  /// Success.
   Result() = default;
+  /// A failure holding `error` (implicit, so a function can return an Error).
   Result(Error error) : error_(std::move(error)) {}  // NOLINT(implicit)
+  /// True on success.
   [[nodiscard]] bool ok() const { return !error_.has_value(); }
+  /// Same as ok().
   explicit operator bool() const { return ok(); }
+  /// The error; only when !ok().
   [[nodiscard]] const Error& error() const {
     SHATTER_ASSERT(!ok());
     return *error_;

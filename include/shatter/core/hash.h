@@ -19,11 +19,15 @@ class Hasher {
   struct is_span<std::span<T, N>> : std::true_type {};
 
  public:
+  /// An empty hash started with `seed`.
   explicit Hasher(std::uint64_t seed = 0);
+  /// Frees the hash state.
   ~Hasher();
+  /// Not copyable (owns the xxHash state).
   Hasher(const Hasher&) = delete;
   Hasher& operator=(const Hasher&) = delete;
 
+  /// `size` raw bytes at `data`.
   void add_bytes(const void* data, std::size_t size);
   /// The bytes of one plain value (an int, a double, an array of them).
   template <class T>
@@ -36,14 +40,17 @@ class Hasher {
   void add(std::span<T, N> values) {
     add_bytes(values.data(), values.size_bytes());
   }
+  /// The characters of a string (not its length).
   void add(std::string_view s) { add_bytes(s.data(), s.size()); }
 
+  /// Hash of everything added so far.
   [[nodiscard]] std::uint64_t digest() const;
 
  private:
   void* state_;
 };
 
+/// One-shot xxHash64 of `size` bytes at `data`.
 std::uint64_t hash_bytes(const void* data, std::size_t size, std::uint64_t seed = 0);
 /// 16 lowercase hex digits.
 std::string hash_to_hex(std::uint64_t hash);

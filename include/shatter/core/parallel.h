@@ -12,8 +12,9 @@
 
 namespace shatter {
 
-/// Threads used by shatter's parallel loops (default: hardware threads). 1 = serial.
+/// Threads used by shatter's parallel loops (default: hardware threads). 1 = serial; n < 1 counts as 1.
 void set_num_threads(int n);
+/// Threads the parallel loops use now (always 1 in a build without OpenMP).
 int num_threads();
 
 /// for i in [begin, end): body(i). Iterations must be independent. Runs in parallel only when

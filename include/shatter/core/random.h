@@ -8,8 +8,10 @@
 
 namespace shatter {
 
+/// Deterministic random number generator: the same seed gives the same numbers on every platform.
 class Random {
  public:
+  /// A generator started at `seed`.
   explicit Random(std::uint64_t seed = 0x5eed) : state_(seed) {}
 
   /// 64 random bits (SplitMix64, Steele, Lea & Flood 2014).

@@ -18,8 +18,8 @@ struct FemModel;
 /// Held (Dirichlet) components of a node: bit c (0 = x, 1 = y, 2 = z) set = component c held.
 /// 7 holds the node; 2 alone is a roller on a plane y = const.
 using AnchorMask = std::uint8_t;
-inline constexpr AnchorMask anchor_none = 0;
-inline constexpr AnchorMask anchor_all = 7;
+inline constexpr AnchorMask anchor_none = 0;  ///< no component held
+inline constexpr AnchorMask anchor_all = 7;   ///< all three components held
 
 /// Symmetric stiffness over the DOFs of the *active* nodes: nodes that belong to a tet and have at
 /// least one free component. DOF 3a + c is component c of active node a. Fully held nodes and
@@ -34,15 +34,19 @@ inline constexpr AnchorMask anchor_all = 7;
 /// block_entry) indexes that same array: nothing is copied between the two forms.
 class BlockSparseMatrix {
  public:
+  /// An empty matrix (no nodes, no pattern).
   BlockSparseMatrix() = default;
   /// Pattern of the stiffness of `tets` over `num_nodes` nodes; `anchors`: held components per node
   /// (#nodes, or empty = nothing held). Values start at zero.
   BlockSparseMatrix(Index num_nodes, const std::vector<TetIndices>& tets, const std::vector<AnchorMask>& anchors);
 
+  /// Nodes of the mesh the pattern was built for.
   [[nodiscard]] Index num_nodes() const { return static_cast<Index>(active_of_node_.size()); }
+  /// Active nodes: in some tet, with at least one free component.
   [[nodiscard]] Index num_active() const { return static_cast<Index>(node_of_active_.size()); }
   /// Number of scalar rows (3 per active node).
   [[nodiscard]] Index size() const { return 3 * num_active(); }
+  /// Number of stored 3x3 blocks.
   [[nodiscard]] Index num_blocks() const { return static_cast<Index>(block_col_.size()); }
   /// Unique per built pattern; symbolic factorizations are keyed on it.
   [[nodiscard]] std::uint64_t pattern_id() const { return pattern_id_; }
@@ -59,12 +63,14 @@ class BlockSparseMatrix {
   /// Tets with at least one active corner, grouped by colour: no two tets of one colour share a
   /// node, colour c is active_tets()[color_ptr()[c] .. color_ptr()[c+1]).
   [[nodiscard]] const std::vector<Index>& active_tets() const { return active_tets_; }
+  /// Start of each colour in active_tets() (#colours + 1).
   [[nodiscard]] const std::vector<Index>& color_ptr() const { return color_ptr_; }
+  /// Number of colours.
   [[nodiscard]] Index num_colors() const { return static_cast<Index>(color_ptr_.size()) - 1; }
 
-  /// Block CSR: block row a has blocks block_ptr()[a] .. block_ptr()[a+1], with block columns
-  /// block_col() (sorted; the diagonal block is among them).
+  /// Block CSR: block row a has blocks block_ptr()[a] .. block_ptr()[a+1] (#active + 1).
   [[nodiscard]] const std::vector<Index>& block_ptr() const { return block_ptr_; }
+  /// Block column of each block, sorted within its row; the diagonal block is among them (#blocks).
   [[nodiscard]] const std::vector<Index>& block_col() const { return block_col_; }
   /// Position in values() of entry (i, j) of block k of block row a: A(3a+i, 3 block_col[k] + j).
   [[nodiscard]] Index block_entry(Index a, Index k, int i, int j) const {
@@ -78,8 +84,10 @@ class BlockSparseMatrix {
 
   /// The matrix in Eigen's form (size() x size(), both triangles).
   [[nodiscard]] const Eigen::SparseMatrix<double>& matrix() const { return matrix_; }
+  /// The stored values, laid out by blocks as described above (num_values()).
   [[nodiscard]] const double* values() const { return matrix_.valuePtr(); }
   [[nodiscard]] double* values() { return matrix_.valuePtr(); }
+  /// Number of stored values (9 per block).
   [[nodiscard]] Index num_values() const { return static_cast<Index>(matrix_.nonZeros()); }
 
   /// y = A x (x, y: size()); rows in parallel, each summed in a fixed order.

@@ -19,6 +19,7 @@ enum class ModelKind { stvk, linear, corotated };
 
 /// "stvk" | "linear" | "corotated"; anything else is an error listing those.
 Result<ModelKind> parse_model_kind(std::string_view name);
+/// "stvk", "linear" or "corotated".
 const char* to_string(ModelKind kind);
 
 /// psi(F), J/m^3.
@@ -28,14 +29,15 @@ Mat3 first_piola(ModelKind kind, const Lame& lame, const Mat3& F);
 /// dP = (d^2 psi / dF^2) : dF, Pa.
 Mat3 first_piola_differential(ModelKind kind, const Lame& lame, const Mat3& F, const Mat3& dF);
 
+/// The factors of a polar decomposition F = R S.
+struct Polar {
+  Mat3 R;  ///< rotation (det +1)
+  Mat3 S;  ///< symmetric stretch
+};
 /// Polar decomposition F = R S with R a rotation (det +1) and S symmetric. For det F < 0 (an
 /// inverted element) S has one negative eigenvalue (the one of smallest magnitude). Computed from
 /// Eigen's JacobiSVD (MPL2), which is deterministic and smooth for non-degenerate F, including F near
 /// a rotation (equal singular values do not make U V^T ill defined).
-struct Polar {
-  Mat3 R;
-  Mat3 S;
-};
 Polar polar_decomposition(const Mat3& F);
 
 }  // namespace shatter

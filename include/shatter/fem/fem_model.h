@@ -32,16 +32,18 @@ struct FastTetData {
   std::vector<std::int64_t> node_entry_slot;   ///< global slot indices per node, in block order
 };
 
+/// The constant data of a FEM body (make_fem_model).
 struct FemModel {
-  ModelKind model = ModelKind::stvk;
-  Material material;
-  Lame lame;
-  std::vector<TetIndices> tets;   ///< node indices per tet (#tets)
-  std::vector<TetRest> rest;      ///< rest data per tet (#tets)
-  std::vector<double> node_mass;  ///< lumped mass, kg (#nodes): each tet gives rho V / 4 per corner
-  Index num_nodes = 0;
-  FastTetData fast;  ///< acceleration data for internal_forces
+  ModelKind model = ModelKind::stvk;  ///< constitutive model
+  Material material;                  ///< material constants
+  Lame lame;                          ///< Lame constants of `material`, Pa
+  std::vector<TetIndices> tets;       ///< node indices per tet (#tets)
+  std::vector<TetRest> rest;          ///< rest data per tet (#tets)
+  std::vector<double> node_mass;      ///< lumped mass, kg (#nodes): each tet gives rho V / 4 per corner
+  Index num_nodes = 0;                ///< nodes of the rest mesh
+  FastTetData fast;                   ///< acceleration data for internal_forces
 
+  /// Number of tets.
   [[nodiscard]] Index num_tets() const { return static_cast<Index>(tets.size()); }
 };
 
@@ -64,11 +66,12 @@ void internal_forces_reference(const FemModel& model, const std::vector<Vec3>& x
 /// Scratch memory of internal_forces: one force slot per (block, node of the block), 3 doubles each
 /// (N). Keep one per caller to avoid reallocating; its contents mean nothing between calls.
 struct ForceWorkspace {
-  std::vector<double> slots;
+  std::vector<double> slots;  ///< 3 doubles per slot, N
 };
 
-/// The same, fast: specialised inline code per model kind, compact rest data, multithreaded; the
-/// result does not depend on the thread count (bitwise) and equals the reference to round-off.
+/// The same, fast: fixed blocks of tets in parallel (stvk by specialised inline code on the compact
+/// rest data, the other models per tet); the result does not depend on the thread count (bitwise)
+/// and equals the reference to round-off.
 void internal_forces(const FemModel& model, const std::vector<Vec3>& x, std::vector<Vec3>& f,
                      ForceWorkspace& workspace);
 /// The same with a workspace of its own (allocated per call).

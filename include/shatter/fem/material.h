@@ -11,6 +11,7 @@
 
 namespace shatter {
 
+/// +inf, for a strength or toughness that is never reached or not known.
 inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 /// A solid's constants. The defaults are the "porcelain" preset (a valid material, the paper's
@@ -27,8 +28,8 @@ struct Material {
 
 /// Lamé constants, Pa.
 struct Lame {
-  double mu = 0;
-  double lambda = 0;
+  double mu = 0;      ///< shear modulus mu, Pa
+  double lambda = 0;  ///< first Lame parameter lambda, Pa
 };
 
 /// mu = E / (2(1+nu)), lambda = E nu / ((1+nu)(1-2nu))  (docs/method.md §2.1).
@@ -38,8 +39,8 @@ Lame lame_parameters(const Material& m);
 /// (may be +inf), no NaN. The error's field names the offending member ("youngs_modulus", ...).
 Result<void> validate_material(const Material& m);
 
-/// A named preset ("glass", "porcelain", "steel", ...). Unknown names give an error listing the
-/// valid ones.
+/// A named preset ("glass", "porcelain", "steel", ...) or an alias of one ("china", "aluminum", ...).
+/// Unknown names give an error listing the valid ones.
 Result<Material> material_preset(std::string_view name);
 
 /// Names of all presets, in a fixed order.

@@ -11,8 +11,8 @@ namespace shatter {
 /// corner 0, so det Dm = 6 V > 0 for the mesh's positive orientation), Dm_inv = Dm^-1 (1/m),
 /// volume V (m^3).
 struct TetRest {
-  Mat3 Dm_inv = Mat3::Zero();
-  double volume = 0;
+  Mat3 Dm_inv = Mat3::Zero();  ///< Dm^-1, 1/m
+  double volume = 0;           ///< rest volume V, m^3
 };
 /// rest_corners: 3x4, column k = corner k, m.
 TetRest tet_rest(const Mat34& rest_corners);
@@ -36,8 +36,8 @@ Mat34 tet_internal_forces(ModelKind kind, const Lame& lame, const TetRest& rest,
 Mat12 tet_stiffness(ModelKind kind, const Lame& lame, const TetRest& rest, const Mat34& x);
 /// The same from 12 evaluations of first_piola_differential (any model; slower; a cross-check).
 Mat12 tet_stiffness_from_differential(ModelKind kind, const Lame& lame, const TetRest& rest, const Mat34& x);
-/// Symmetric part of K with negative eigenvalues clamped to 0. A K that is already positive
-/// semi-definite is returned unchanged.
+/// Symmetric part of K with negative eigenvalues clamped to 0. When that symmetric part is
+/// already positive semi-definite it is returned as is.
 Mat12 project_psd(const Mat12& K);
 
 /// Cauchy (true) stress sigma = P F^T / det F, Pa; for the linear model the small-strain stress

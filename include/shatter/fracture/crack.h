@@ -13,6 +13,7 @@
 
 namespace shatter {
 
+/// Settings of crack planning (plan_cracks).
 struct CrackOptions {
   /// k in r_frac = max(r_min, r_0 min(1, k (sigma / sigma_t - 1))). 0: from the material,
   /// k = clamp(sigma_t sqrt(pi L) / K_Ic, 0.5, 20) = clamp(sqrt(L / l_ch), 0.5, 20), with L the body
@@ -28,10 +29,11 @@ struct CrackOptions {
   /// At most this many cracks per load (0: none).
   int max_cracks = 4;
   /// A further origin must lie outside every earlier crack's region and farther than
-  /// separation x r_frac from each earlier origin.
+  /// separation x (that crack's r_frac) from each earlier origin.
   double separation = 1.0;
 };
 
+/// One planned crack.
 struct CrackPlan {
   Index origin_tet = -1;        ///< tet index in the planning mesh
   Vec3 origin = Vec3::Zero();   ///< plane point: the origin tet's centroid, m
@@ -39,8 +41,8 @@ struct CrackPlan {
   double stress = 0;            ///< largest principal stress at the origin, Pa
   double radius = 0;            ///< r_frac, m
   bool ductile = false;         ///< origin came from exceeding the maximum plastic strain
-  std::vector<Index> tets;      ///< region: tets reachable from the origin through faces whose
-                                ///< centroids lie within `radius` (sorted)
+  std::vector<Index> tets;      ///< region: tets with centroids within `radius` of `origin`,
+                                ///< reachable from the origin tet through shared faces (sorted)
 };
 
 /// Derived brittleness k (see CrackOptions::brittleness) for a body of size L (m).
@@ -65,12 +67,15 @@ std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStr
 /// that a sustained load of the same size would (the idea of Bao et al. 2007's time averaging).
 class StressHistory {
  public:
+  /// Zero averages for `num_tets` tets; time constant tau, s (> 0).
   StressHistory(Index num_tets, double time_constant);
   /// Fold in the stresses (Pa, #tets) held for dt seconds.
   void update(const std::vector<Mat3>& sigma, double dt);
   /// After a cut: tet e of the new mesh inherits the average of tet_parent[e].
   void remap(const std::vector<Index>& tet_parent);
+  /// The averaged Cauchy stress per tet, Pa (#tets).
   [[nodiscard]] const std::vector<Mat3>& averaged() const { return average_; }
+  /// tau, s.
   [[nodiscard]] double time_constant() const { return tau_; }
 
  private:

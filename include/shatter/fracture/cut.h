@@ -13,10 +13,11 @@ namespace shatter {
 /// The plane {x : normal . (x - point) = 0}; `normal` is a unit vector, the + side is where it
 /// points.
 struct CutPlane {
-  Vec3 point = Vec3::Zero();  ///< m
-  Vec3 normal = Vec3::UnitX();
+  Vec3 point = Vec3::Zero();    ///< a point on the plane, m
+  Vec3 normal = Vec3::UnitX();  ///< unit normal
 };
 
+/// Settings of the cut.
 struct CutOptions {
   /// Split the crack's tets that the plane crosses along it, so the crack surface is flat
   /// (docs/method.md Fig. 4). Off: the crack follows the mesh's faces.
@@ -34,11 +35,12 @@ struct CutOptions {
 /// (a == b, t == 0 for a kept or duplicated node). Interpolate deformed positions or velocities the
 /// same way.
 struct NodeOrigin {
-  Index a = -1;
-  Index b = -1;
-  double t = 0;
+  Index a = -1;  ///< first input node
+  Index b = -1;  ///< second input node (== a for a kept or duplicated node)
+  double t = 0;  ///< weight of b, in [0, 1]
 };
 
+/// A cut mesh and how it relates to the input.
 struct CutResult {
   TetMesh mesh;                         ///< the cut mesh: input nodes and tets keep their indices
                                         ///< (a split tet's first piece keeps its index); new ones
@@ -59,20 +61,22 @@ struct CutResult {
 CutResult split_along_plane(const TetMesh& mesh, const CutPlane& plane, const std::vector<Index>& region,
                             const CutOptions& options = {});
 
+/// A mesh with faces disconnected (disconnect_faces).
+struct DisconnectResult {
+  TetMesh mesh;                    ///< the input's tets and nodes, plus the node copies (appended)
+  std::vector<Index> node_parent;  ///< input node of each node of `mesh` (#nodes of mesh)
+  Index nodes_duplicated = 0;      ///< node copies made
+  Index faces_cut = 0;             ///< faces disconnected
+};
 /// Disconnect the faces between tets of side +1 and -1 (#tets, others 0): every node on such a face
 /// gets one copy per group of its tets that stay connected through uncut faces around it, so a
 /// crack ending inside the body leaves the rest attached. Faces whose disconnection would leave an
 /// edge with more than two boundary triangles are kept connected. `node_parent` receives the
 /// input node of each output node.
-struct DisconnectResult {
-  TetMesh mesh;
-  std::vector<Index> node_parent;  ///< (#nodes of mesh)
-  Index nodes_duplicated = 0;
-  Index faces_cut = 0;
-};
 DisconnectResult disconnect_faces(const TetMesh& mesh, const std::vector<std::int8_t>& tet_side);
 
-/// split_along_plane (if options.split_tets) then disconnect_faces.
+/// split_along_plane (which marks the sides, and splits only if options.split_tets) then
+/// disconnect_faces; node_origin is given relative to the input mesh.
 CutResult cut_mesh(const TetMesh& mesh, const CutPlane& plane, const std::vector<Index>& region,
                    const CutOptions& options = {});
 

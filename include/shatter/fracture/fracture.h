@@ -15,10 +15,11 @@
 
 namespace shatter {
 
+/// Settings of fracture(): crack planning, cutting and plasticity.
 struct FractureOptions {
-  CrackOptions crack;
-  CutOptions cut;
-  PlasticityOptions plasticity;
+  CrackOptions crack;            ///< crack planning
+  CutOptions cut;                ///< cutting
+  PlasticityOptions plasticity;  ///< plastic update
   /// Accumulated plastic strain per tet of the rest mesh from earlier events (empty: zeros).
   std::vector<double> plastic_strain;
 };
@@ -26,14 +27,15 @@ struct FractureOptions {
 /// One crack: its plan (origin, normal, radius, region in the mesh it was planned on) and what the
 /// cut did.
 struct CrackEvent {
-  CrackPlan plan;
-  Index tets_marked = 0;  ///< tets in the crack region when it was cut
-  Index tets_split = 0;
-  Index edge_nodes = 0;
-  Index nodes_duplicated = 0;
-  Index faces_cut = 0;
+  CrackPlan plan;              ///< the planned crack
+  Index tets_marked = 0;       ///< tets in the crack region when it was cut
+  Index tets_split = 0;        ///< tets split along the plane
+  Index edge_nodes = 0;        ///< nodes made on crossed edges
+  Index nodes_duplicated = 0;  ///< node copies made to open the crack
+  Index faces_cut = 0;         ///< faces disconnected
 };
 
+/// Everything fracture() produced.
 struct FractureResult {
   TetMesh mesh;                        ///< rest mesh after plasticity and every cut
   std::vector<Vec3> deformed;          ///< deformed positions of mesh's nodes, m (#nodes)
@@ -41,7 +43,7 @@ struct FractureResult {
                                        ///< edge: its nearer end) (#nodes)
   std::vector<Index> tet_parent;       ///< input tet of each tet (#tets)
   std::vector<double> plastic_strain;  ///< accumulated plastic strain per tet of mesh (#tets)
-  std::vector<TetStress> stress;       ///< stress per input tet
+  std::vector<TetStress> stress;       ///< stress per input tet (#tets of the input)
   PlasticResult plastic;               ///< the plastic event on the input mesh
   std::vector<CrackEvent> events;      ///< cracks in the order cut
   std::vector<Fragment> fragments;     ///< components of mesh (maps index into mesh); one if unbroken

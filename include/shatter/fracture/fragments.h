@@ -10,6 +10,7 @@
 
 namespace shatter {
 
+/// One connected piece of a mesh as a mesh of its own.
 struct Fragment {
   TetMesh mesh;                 ///< the component's tets and nodes
   std::vector<Index> node_map;  ///< node of the source mesh of each fragment node (#nodes)
@@ -18,7 +19,7 @@ struct Fragment {
 };
 
 /// One fragment per connected component (tets sharing a node), in order of each component's
-/// lowest tet; tets keep their relative order.
+/// lowest tet; tets keep their relative order. `density`: kg/m^3.
 std::vector<Fragment> extract_fragments(const TetMesh& mesh, double density);
 
 }  // namespace shatter

@@ -11,8 +11,9 @@
 
 namespace shatter {
 
+/// Settings of the plastic update.
 struct PlasticityOptions {
-  bool enabled = true;
+  bool enabled = true;  ///< false: no plasticity (none either when the yield stress is +inf)
   /// Fraction in [0, 1] of a yielded tet's excess absorbed per event: its weight is
   /// w_e = creep (1 - sigma_y / sigma_vm). 1 with sigma_y -> 0 is the paper's m := x.
   double creep = 0.5;
@@ -23,6 +24,7 @@ struct PlasticityOptions {
   double min_volume_fraction = 0.2;
 };
 
+/// The outcome of one plastic event.
 struct PlasticResult {
   std::vector<Vec3> rest_positions;    ///< updated rest positions, m (#nodes)
   std::vector<double> plastic_strain;  ///< accumulated equivalent plastic strain per tet (#tets)

@@ -9,6 +9,7 @@
 
 namespace shatter {
 
+/// The stress of one tet and what is derived from it.
 struct TetStress {
   Mat3 sigma = Mat3::Zero();           ///< Cauchy stress, Pa
   Vec3 principal = Vec3::Zero();       ///< principal stresses, Pa, descending (tension positive)

@@ -13,7 +13,9 @@
 
 namespace shatter {
 
+/// Which nodes an anchor or a load applies to.
 struct NodeSelector {
+  /// How nodes are chosen: by file id, inside a box, near a plane, or a named node set.
   enum class Kind { ids, box, plane, set } kind = Kind::ids;
   std::vector<FileId> ids;      ///< kind ids: node ids as in the mesh file
   Aabb box;                     ///< kind box: nodes with min - tol <= p <= max + tol (m)
@@ -28,7 +30,7 @@ struct NodeSelector {
 /// an id not in the mesh, an unknown set, a selection with no node.
 Result<std::vector<Index>> select_nodes(const TetMesh& mesh, const NodeSelector& selector);
 
-/// Human-readable one-line description ("box [0 0 0]..[1 1 1]", "3 node ids").
+/// Human-readable one-line description ("box [0, 0, 0]..[1, 1, 1]", "3 node id(s)").
 std::string describe(const NodeSelector& selector);
 
 /// Lumped boundary area of each of `nodes` (m^2, same order): each boundary triangle whose three

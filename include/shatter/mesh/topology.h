@@ -15,6 +15,7 @@ namespace shatter {
 /// corners, in this order, give the outward normal by the right-hand rule.
 inline constexpr std::array<std::array<int, 3>, 4> kTetFaces = {{{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}};
 
+/// The unique faces of a tet mesh and the tets on each side (compute_faces).
 struct TetFaces {
   /// Each unique face: corners as seen from tets[0] (outward for tets[0]) (#faces).
   std::vector<TriIndices> faces;
@@ -26,7 +27,9 @@ struct TetFaces {
   /// (face, tet) pairs and not in face_tets.
   std::vector<std::array<Index, 2>> overshared;
 
+  /// Number of unique faces.
   [[nodiscard]] Index num_faces() const { return static_cast<Index>(faces.size()); }
+  /// Whether face f has a tet on one side only.
   [[nodiscard]] bool is_boundary(Index f) const { return face_tets[f][1] < 0; }
   /// The tet across local face k of tet e, or -1 on the boundary.
   [[nodiscard]] Index neighbor(Index e, int k) const {
@@ -41,7 +44,7 @@ TetFaces compute_faces(const TetMesh& mesh);
 
 /// A triangle surface: positions indexed by triangles.
 struct TriSurface {
-  std::vector<Vec3> positions;        ///< (#vertices)
+  std::vector<Vec3> positions;        ///< vertex positions, m (#vertices)
   std::vector<TriIndices> triangles;  ///< outward oriented (#triangles)
   std::vector<Index> vertex_node;     ///< tet-mesh node of each vertex (#vertices)
   std::vector<Index> triangle_tet;    ///< tet each triangle bounds (#triangles)
@@ -50,19 +53,23 @@ struct TriSurface {
 /// The boundary faces of the mesh as outward-oriented triangles, with only the boundary nodes as
 /// vertices (in increasing node order).
 TriSurface boundary_surface(const TetMesh& mesh, const TetFaces& faces);
+/// The same, computing the faces first.
 TriSurface boundary_surface(const TetMesh& mesh);
 
-/// Connected components: tets are connected when they share a node. Returns a label per tet in
-/// [0, count); labels numbered in order of each component's lowest tet index.
+/// A label per tet naming its connected component.
 struct Components {
-  std::vector<Index> tet_component;  ///< (#tets)
-  Index count = 0;
+  std::vector<Index> tet_component;  ///< component of each tet, in [0, count) (#tets)
+  Index count = 0;                   ///< number of components
 };
+/// Connected components: tets are connected when they share a node. Labels are numbered in order
+/// of each component's lowest tet index.
 Components connected_components(const TetMesh& mesh);
 
+/// The tets incident to each node, in CSR form (node_tets).
 struct NodeTets {
   std::vector<Index> begin;  ///< CSR offsets (#nodes + 1)
   std::vector<Index> tets;   ///< incident tets of each node, increasing
+  /// The tets incident to node v, increasing.
   [[nodiscard]] std::span<const Index> of(Index v) const {
     return {tets.data() + begin[v], static_cast<std::size_t>(begin[v + 1] - begin[v])};
   }

@@ -9,6 +9,7 @@
 
 namespace shatter {
 
+/// The kinds of problem validate_mesh reports.
 enum class MeshProblemKind {
   node_not_finite,     ///< NaN or Inf coordinate
   index_out_of_range,  ///< tet references a node that does not exist
@@ -19,31 +20,39 @@ enum class MeshProblemKind {
   unreferenced_node,   ///< node used by no tet
   attribute_size,      ///< an optional attribute array has the wrong length
 };
+/// The enumerator's name ("degenerate_tet", ...).
 const char* to_string(MeshProblemKind kind);
 
+/// error: the mesh cannot be used; warning: it can (inverted tets, unused nodes).
 enum class Severity { warning, error };
 
+/// One problem found in a mesh.
 struct MeshProblem {
-  MeshProblemKind kind;
-  Severity severity;
-  std::string message;  ///< names file ids: "tet 17 (nodes 3 4 9 12): volume -1.2e-06 < 0"
+  MeshProblemKind kind;  ///< what is wrong
+  Severity severity;     ///< whether it makes the mesh unusable
+  std::string message;   ///< names file ids: "tet 17 (nodes 3 4 9 12): volume -1.2e-06 < 0"
 };
 
+/// Thresholds and limits of validate_mesh.
 struct ValidateOptions {
-  /// A tet whose |volume| < relative_volume_epsilon * (mean edge length)^3 is degenerate.
+  /// A tet whose |volume| <= relative_volume_epsilon * (mean edge length)^3 is degenerate.
   double relative_volume_epsilon = 1e-12;
   /// Report at most this many problems of each kind (the counts stay exact).
   int max_reports_per_kind = 20;
 };
 
+/// Every problem validate_mesh found.
 struct ValidationReport {
   std::vector<MeshProblem> problems;  ///< capped per kind
   std::vector<std::size_t> counts;    ///< exact count per MeshProblemKind
+  /// Whether any reported problem has error severity.
   [[nodiscard]] bool has_errors() const;
+  /// Exact number of problems of `kind` (0 for an empty report).
   [[nodiscard]] std::size_t count(MeshProblemKind kind) const;
 };
 
-/// Check everything; never modifies the mesh.
+/// Check everything; never modifies the mesh. An attribute array of the wrong length ends the
+/// checks there (the ids in further messages would be wrong).
 ValidationReport validate_mesh(const TetMesh& mesh, const ValidateOptions& options = {});
 
 /// Swap two corners of every negatively oriented tet. Returns the number reoriented.

@@ -24,15 +24,17 @@ namespace shatter {
 /// primitive, a smooth union, a rotation that is not a multiple of 90 degrees about the axes).
 std::optional<std::vector<Aabb>> box_csg_boxes(const Sdf& sdf);
 
+/// Size settings of the box-CSG mesher.
 struct BoxCsgDef {
   /// Wanted cell size, m: each grid interval of length L is split into max(1, round(L / h))
   /// pieces. If 0, chosen to get the count closest to `target_tets`.
   double edge_length = 0.0;
-  std::int64_t target_tets = 0;
+  std::int64_t target_tets = 0;  ///< wanted tet count when edge_length == 0
   /// Refuse grids with more cells than this (memory guard).
   std::int64_t max_cells = 20'000'000;
 };
 
+/// What the box-CSG mesher did.
 struct BoxCsgReport {
   double edge_length = 0;        ///< h used, m
   std::array<Index, 3> grid{};   ///< intervals of the box-face grid along x, y, z

@@ -25,17 +25,19 @@ const char* to_string(MeshMethod method);
 /// The inverse of to_string; an error listing the valid names otherwise.
 Result<MeshMethod> parse_mesh_method(std::string_view name);
 
+/// Settings of mesh_shape.
 struct MeshShapeDef {
   /// Size (edge length or target tet count) for every method; grading, sharpening and the other
   /// stuffing settings for stuffing.
   StuffingDef stuffing;
-  MeshMethod method = MeshMethod::automatic;
+  MeshMethod method = MeshMethod::automatic;  ///< which mesher to use
   /// Angular segments of the revolve mesher (0: from the edge length; otherwise >= 3).
   int segments = 0;
 };
 
+/// The mesh and what its mesher reported.
 struct MeshShapeResult {
-  TetMesh mesh;
+  TetMesh mesh;                              ///< the mesh, tets positively oriented
   MeshMethod method = MeshMethod::stuffing;  ///< the mesher used: stuffing, box_csg or revolve
   double edge_length = 0;                    ///< h used, m
   StuffingReport stuffing;                   ///< method stuffing (edge_length set for all)
@@ -48,6 +50,7 @@ struct MeshShapeResult {
 /// structured method for a shape that does not qualify, a bad segment count, and the mesher's own.
 Result<MeshShapeResult> mesh_shape(const Sdf& sdf, const MeshShapeDef& def, const std::string& name = "shape");
 
+/// A volume to judge a mesh by, and where it came from.
 struct ReferenceVolume {
   double volume = 0;  ///< m^3
   std::string kind;   ///< "analytic", "exact" or "extrapolated from h/2"

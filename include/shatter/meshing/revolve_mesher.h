@@ -28,24 +28,27 @@
 
 namespace shatter {
 
-/// A revolution profile and the transform placing it (a `revolution` node, possibly under
-/// transforms), or nullopt for any other tree.
+/// A revolution profile and the transform placing it.
 struct RevolvedShape {
-  std::vector<Vec2> profile;
-  Sdf::Transform transform;
+  std::vector<Vec2> profile;  ///< closed (r, y) polygon, m
+  Sdf::Transform transform;   ///< the transforms above the revolution node, composed
 };
+/// The revolution of `sdf` (a `revolution` node, possibly under transforms), or nullopt for any
+/// other tree.
 std::optional<RevolvedShape> revolved_shape(const Sdf& sdf);
 
+/// Size settings of the revolve mesher.
 struct RevolveDef {
   /// Profile spacing and circumferential spacing at the largest radius, m. If 0, chosen to get
   /// about `target_tets`.
   double edge_length = 0.0;
-  std::int64_t target_tets = 0;
+  std::int64_t target_tets = 0;  ///< wanted tet count when edge_length == 0
   /// Angular segments; 0: max(min_segments, round(2 pi r_max / edge_length)).
   int segments = 0;
-  int min_segments = 6;
+  int min_segments = 6;  ///< fewest segments of any sweep or angular level (>= 3)
 };
 
+/// What the revolve mesher did.
 struct RevolveReport {
   double edge_length = 0;           ///< m
   int segments = 0;                 ///< angular segments N (at the largest radius)
@@ -60,8 +63,9 @@ struct RevolveReport {
 /// Triangles counter-clockwise, as indices into `polygon`. Error if the polygon is not simple.
 Result<std::vector<std::array<Index, 3>>> triangulate_polygon(const std::vector<Vec2>& polygon);
 
-/// Mesh a revolution (revolved_shape(sdf) must succeed). Nodes: axis vertices, then N per
-/// off-axis profile vertex; tets positively oriented. Deterministic.
+/// Mesh a revolution (revolved_shape(sdf) must succeed). Nodes: axis vertices, then N / 2^level per
+/// off-axis profile vertex (N without levels), then any centre nodes of two-level polytopes; tets
+/// positively oriented. Deterministic.
 Result<TetMesh> mesh_revolution(const Sdf& sdf, const RevolveDef& def, RevolveReport* report = nullptr);
 
 }  // namespace shatter

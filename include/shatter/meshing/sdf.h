@@ -21,8 +21,10 @@ namespace shatter {
 
 class SurfaceDistance;  // meshing/surface_sdf.h
 
+/// A signed distance function as an immutable tree of shared nodes (copies are cheap).
 class Sdf {
  public:
+  /// Node type: a primitive, a CSG operation or a transform.
   enum class Kind {
     sphere,
     box,
@@ -45,6 +47,7 @@ class Sdf {
   Sdf() = default;
 
   // --- Primitives, centred at the origin, Y up. All lengths in m, must be > 0. ---
+  /// Sphere of `radius`.
   static Sdf sphere(double radius);
   /// Box with half extents (x, y, z).
   static Sdf box(const Vec3& half_extents);
@@ -67,9 +70,11 @@ class Sdf {
   static Sdf surface(std::shared_ptr<const SurfaceDistance> surface);
 
   // --- CSG and transforms. ---
+  /// Union of the children (min of their distances).
   static Sdf unite(std::vector<Sdf> children);
   /// a minus every later child.
   static Sdf subtract(std::vector<Sdf> children);
+  /// Intersection of the children (max of their distances).
   static Sdf intersect(std::vector<Sdf> children);
   /// Polynomial smooth minimum (Quilez): h = max(k - |a-b|, 0) / k, min(a,b) - h^2 k / 4,
   /// folded left over the children. k (m) is the blend width.
@@ -77,8 +82,11 @@ class Sdf {
   /// x -> translation + rotation * scale * x applied to the shape (scale > 0).
   [[nodiscard]] Sdf transformed(const Vec3& translation, const Mat3& rotation = Mat3::Identity(),
                                 double scale = 1.0) const;
+  /// The shape moved by t (m).
   [[nodiscard]] Sdf translated(const Vec3& t) const { return transformed(t); }
+  /// The shape rotated by r about the origin.
   [[nodiscard]] Sdf rotated(const Mat3& r) const { return transformed(Vec3::Zero(), r); }
+  /// The shape scaled by s (> 0) about the origin.
   [[nodiscard]] Sdf scaled(double s) const { return transformed(Vec3::Zero(), Mat3::Identity(), s); }
 
   /// Signed distance at p (m): < 0 inside.
@@ -87,7 +95,9 @@ class Sdf {
   [[nodiscard]] Aabb bounds() const;
   /// Exact volume (m^3) for primitives and their transforms; nullopt for CSG and surfaces.
   [[nodiscard]] std::optional<double> analytic_volume() const;
+  /// Whether this is the empty tree.
   [[nodiscard]] bool empty() const { return node_ == nullptr; }
+  /// Type of the root node (unite for the empty tree).
   [[nodiscard]] Kind kind() const;
 
   // --- Read access to the tree (for the structured meshers). ---
@@ -95,16 +105,18 @@ class Sdf {
   [[nodiscard]] const std::vector<Sdf>& children() const;
   /// Box half extents (box); zero otherwise.
   [[nodiscard]] Vec3 half_extents() const;
-  /// Revolution profile (r, y) or extrusion polygon (x, y); empty otherwise.
+  /// Revolution (or cone) profile (r, y) or extrusion polygon (x, y); empty otherwise.
   [[nodiscard]] const std::vector<Vec2>& polygon() const;
-  /// A transform node's map x -> translation + rotation * scale * x (identity otherwise).
+  /// The map x -> translation + rotation * scale * x.
   struct Transform {
-    Vec3 translation = Vec3::Zero();
-    Mat3 rotation = Mat3::Identity();
-    double scale = 1.0;
+    Vec3 translation = Vec3::Zero();   ///< m
+    Mat3 rotation = Mat3::Identity();  ///< rotation matrix
+    double scale = 1.0;                ///< uniform scale (> 0)
   };
+  /// A transform node's map (identity for other nodes).
   [[nodiscard]] Transform transform() const;
 
+  /// A node of the tree (defined in sdf.cpp).
   struct Node;
 
  private:

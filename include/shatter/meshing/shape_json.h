@@ -14,6 +14,7 @@
 
 namespace shatter {
 
+/// A parsed shape file: the shape and its meshing hints.
 struct ShapeFile {
   std::string name;              ///< "name", or "" if absent
   Sdf sdf;                       ///< the "shape" tree
@@ -27,9 +28,10 @@ struct ShapeFile {
 /// against the JSON file's folder. Without a loader, surface nodes are an error.
 using SurfaceLoader = std::function<Result<TriSurface>(const std::string& path)>;
 
+/// Options of parse_shape_json.
 struct ShapeJsonOptions {
-  std::string base_dir;  ///< folder that relative "file" paths start from
-  SurfaceLoader load_surface;
+  std::string base_dir;        ///< folder that relative "file" paths start from
+  SurfaceLoader load_surface;  ///< loader for "surface" nodes (empty: they are an error)
 };
 
 /// Parse a shape file held in memory; `file_name` is used in error messages.

@@ -21,15 +21,16 @@
 namespace shatter {
 
 /// Warp thresholds as fractions of the edge length (Labelle & Shewchuk 2007, section 3).
-inline constexpr double kStuffingAlphaLong = 0.24999;
-inline constexpr double kStuffingAlphaShort = 0.41189;
+inline constexpr double kStuffingAlphaLong = 0.24999;   ///< for the long (axis-parallel) BCC edges
+inline constexpr double kStuffingAlphaShort = 0.41189;  ///< for the short (diagonal) BCC edges
 /// Dihedral-angle bounds of every tet stuffing outputs with these alphas, degrees: the extremes of
 /// the stencil table over every configuration a warped BCC tet can take, found by exhaustive grid
 /// and local search (tests/meshing/test_stuffing_stencil.cpp; docs/meshing.md). Sharpening and
 /// grading only make changes that keep every tet inside them.
-inline constexpr double kStuffingMinDihedralDeg = 9.3;
-inline constexpr double kStuffingMaxDihedralDeg = 161.7;
+inline constexpr double kStuffingMinDihedralDeg = 9.3;    ///< smallest dihedral angle, degrees
+inline constexpr double kStuffingMaxDihedralDeg = 161.7;  ///< largest dihedral angle, degrees
 
+/// Settings of isosurface stuffing.
 struct StuffingDef {
   /// Lattice spacing h (the long BCC edge), m. If 0, chosen to get about `target_tets`.
   double edge_length = 0.0;
@@ -37,8 +38,8 @@ struct StuffingDef {
   std::int64_t target_tets = 0;
   /// Warp thresholds as fractions of the edge length (Labelle & Shewchuk 2007, section 3), in
   /// (0, 0.5). The dihedral bounds above hold for the default values only.
-  double alpha_long = kStuffingAlphaLong;
-  double alpha_short = kStuffingAlphaShort;
+  double alpha_long = kStuffingAlphaLong;    ///< long BCC edges
+  double alpha_short = kStuffingAlphaShort;  ///< short BCC edges
   /// Move boundary nodes onto the shape's creases and corners (sharpen.h), inside the dihedral
   /// bounds, so sharp edges stay sharp instead of being rounded at the scale of h.
   bool sharpen = true;
@@ -46,17 +47,18 @@ struct StuffingDef {
   /// (coarsen.h): the wanted edge length grows from h at depth h below the surface by g per unit
   /// depth, up to max_size_ratio * h. The boundary and the dihedral-angle bounds are kept.
   double grading = 0.0;
-  double max_size_ratio = 8.0;
+  double max_size_ratio = 8.0;  ///< cap on the graded edge length, in units of h
   /// Dihedral-angle range every tet changed by sharpening or grading must keep, degrees (clamped
   /// to the stencil bounds): tighter than the bounds, so neither lowers the mesh's quality much.
-  double changed_min_dihedral_deg = 15.0;
-  double changed_max_dihedral_deg = 150.0;
+  double changed_min_dihedral_deg = 15.0;   ///< lower end, degrees
+  double changed_max_dihedral_deg = 150.0;  ///< upper end, degrees
   /// False-position iterations for each cut point (distance functions converge in a few).
   int root_iterations = 16;
   /// Refuse lattices larger than this (memory guard).
   std::int64_t max_lattice_vertices = 60'000'000;
 };
 
+/// What stuffing did.
 struct StuffingReport {
   double edge_length = 0;                ///< h used, m
   std::int64_t lattice_vertices = 0;     ///< black + red lattice vertices evaluated

@@ -17,6 +17,7 @@
 
 namespace shatter {
 
+/// Inside test and distance queries on one closed triangle surface (see the top of this file).
 class SurfaceDistance {
  public:
   /// Checks the surface: not empty, finite coordinates, valid indices, some non-degenerate
@@ -31,7 +32,9 @@ class SurfaceDistance {
   [[nodiscard]] double unsigned_distance(const Vec3& p) const;
   /// -distance inside (winding number > 1/2), +distance outside.
   [[nodiscard]] double signed_distance(const Vec3& p) const;
+  /// Bounding box of the surface, m.
   [[nodiscard]] const Aabb& bounds() const { return bounds_; }
+  /// Triangles kept (zero-area ones are dropped).
   [[nodiscard]] std::size_t num_triangles() const { return tris_.size(); }
 
  private:

@@ -44,7 +44,7 @@ struct RigidState {
 
 /// The changing data of one body.
 struct BodyState {
-  RigidState rigid;
+  RigidState rigid;                             ///< pose and velocities
   std::vector<double> plastic_strain;           ///< accumulated equivalent plastic strain (#tets)
   std::optional<StressHistory> stress_history;  ///< time-averaged stress (#tets), when used
   /// Pattern and factorization kept between impacts (a cache: not copyable, so the state is
@@ -52,9 +52,10 @@ struct BodyState {
   std::unique_ptr<StaticSolver> solver;
 };
 
-/// Build a body from a rest mesh given in the world: the mesh is validated (positively oriented
-/// tets, no unused node), moved into the body frame, and its model built. `rigid` receives the
-/// pose that puts the body where the mesh was (position = centre of mass, orientation identity).
+/// Build a body from a rest mesh given in the world: the mesh is validated (no validate_mesh error,
+/// positively oriented tets, positive volume), moved into the body frame, and its model built.
+/// `rigid` receives the pose that puts the body where the mesh was (position = centre of mass,
+/// orientation identity).
 /// Errors: an invalid mesh or material, a mesh with no tets.
 Result<BodyModel> make_body_model(const TetMesh& world_mesh, const Material& material,
                                   ModelKind model = ModelKind::stvk, RigidState* rigid = nullptr);

@@ -25,8 +25,8 @@ struct RigidInertia {
   Mat3 inverse_inertia_body = Mat3::Zero();  ///< its inverse (0: no rotation)
 };
 
-/// From exact mass properties (mass > 0 and a positive definite inertia; else the body is treated
-/// as infinitely heavy).
+/// From exact mass properties. A mass that is not > 0 gives an infinitely heavy body (inverse mass
+/// 0); an inertia that is not positive definite gives a zero inverse inertia (torques do not turn it).
 RigidInertia rigid_inertia(const MassProperties& mass);
 
 /// World inverse inertia R I_b^-1 R^T at `orientation`.
@@ -39,12 +39,13 @@ Vec3 angular_momentum(const RigidInertia& inertia, const RigidState& state);
 double kinetic_energy(const RigidInertia& inertia, const RigidState& state);
 
 /// Kick: v += dt f / m, L += dt torque (world, N and N m), w from the new L at the current
-/// orientation.
+/// orientation. No effect on an infinitely heavy body.
 void integrate_velocity(const RigidInertia& inertia, RigidState& state, const Vec3& force, const Vec3& torque,
                         double dt);
 
 /// Drift: x += dt v, and the torque-free rotation over dt described at the top of this file. The
-/// angular velocity is updated to the end-of-step one (w = R' I_b^-1 L_b').
+/// angular velocity is updated to the end-of-step one (w = R' I_b^-1 L_b'). An infinitely heavy
+/// (kinematic) body turns at its given world angular velocity instead.
 void integrate_position(const RigidInertia& inertia, RigidState& state, double dt);
 
 }  // namespace shatter

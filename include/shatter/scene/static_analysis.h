@@ -18,26 +18,27 @@
 
 namespace shatter {
 
+/// Options of run_static_analysis.
 struct StaticAnalysisOptions {
   /// Crack and yield the solved body with the case's "fracture" settings (fracture.h).
   bool fracture = false;
 };
 
 /// Everything a static analysis computed. When the solver did not converge, `report` says why
-/// (report.converged false) and `results`, `fracture` are empty: nothing should be written.
+/// (report.converged false) and `stress`, `results`, `fracture` are empty: nothing should be written.
 struct StaticAnalysis {
-  ResolvedStaticCase resolved;  ///< anchors and loads per node
-  FemModel model;               ///< of the input mesh
-  StaticProblem problem;
-  StaticSolverOptions solver_options;
-  StaticReport report;
-  std::vector<Vec3> deformed;     ///< equilibrium positions, m (#nodes)
-  std::vector<TetStress> stress;  ///< per tet at `deformed` (#tets)
-  StaticResults results;
+  ResolvedStaticCase resolved;             ///< anchors and loads per node
+  FemModel model;                          ///< of the input mesh
+  StaticProblem problem;                   ///< what the solver was given
+  StaticSolverOptions solver_options;      ///< solver settings, from the case
+  StaticReport report;                     ///< how the solve ended
+  std::vector<Vec3> deformed;              ///< equilibrium positions, m (#nodes)
+  std::vector<TetStress> stress;           ///< per tet at `deformed` (#tets)
+  StaticResults results;                   ///< displacements and stresses
   std::optional<FractureResult> fracture;  ///< with options.fracture
   Vec3 gravity_load = Vec3::Zero();        ///< total gravity load, N (zero without gravity)
-  double setup_ms = 0;                     ///< case resolution and model
-  double fracture_ms = 0;
+  double setup_ms = 0;                     ///< case resolution and model, ms
+  double fracture_ms = 0;                  ///< fracture and plasticity, ms
 };
 
 /// Run the analysis. Errors: the case does not fit the mesh (resolve_static_case), or the solver

@@ -22,7 +22,7 @@ namespace shatter {
 
 /// Nodes whose components are held at their rest position plus `displacement`.
 struct AnchorSpec {
-  NodeSelector where;
+  NodeSelector where;                ///< the nodes
   std::uint8_t components = 7;       ///< bit c (0 = x, 1 = y, 2 = z) set = component held
   Vec3 displacement = Vec3::Zero();  ///< prescribed displacement of the held components, m
   std::string field;                 ///< JSON path, for messages ("anchors[1]")
@@ -30,7 +30,7 @@ struct AnchorSpec {
 
 /// External force on nodes: `force` on each selected node, or `total_force` spread over them.
 struct LoadSpec {
-  NodeSelector where;
+  NodeSelector where;         ///< the nodes
   Vec3 force = Vec3::Zero();  ///< N: per node (per_node) or in total
   bool per_node = true;       ///< "force" (true) or "total_force" (false)
   /// How a total force is spread: equally per node, or by lumped boundary area (each boundary
@@ -47,18 +47,19 @@ struct CaseSolverSettings {
   std::optional<std::int64_t> linear_max_iterations;  ///< iteration limit of an iterative linear solver
   std::optional<std::int64_t> max_iterations;         ///< Newton iterations (per load step)
   std::optional<std::int64_t> load_steps;             ///< load increments
-  std::optional<bool> line_search;
+  std::optional<bool> line_search;                    ///< energy line search on / off
 };
 
+/// A parsed load case.
 struct StaticCase {
-  std::string file;   ///< the case file (for messages)
-  std::string name;   ///< "name", or the case file's stem
-  Material material;  ///< validated
-  ModelKind model = ModelKind::stvk;
-  std::vector<AnchorSpec> anchors;  ///< at least one
-  std::vector<LoadSpec> loads;
-  Vec3 gravity = Vec3::Zero();  ///< m/s^2; zero = off ("gravity": true gives (0, -9.81, 0))
-  CaseSolverSettings solver;
+  std::string file;                   ///< the case file (for messages)
+  std::string name;                   ///< "name", or the case file's stem
+  Material material;                  ///< validated
+  ModelKind model = ModelKind::stvk;  ///< constitutive model
+  std::vector<AnchorSpec> anchors;    ///< at least one
+  std::vector<LoadSpec> loads;        ///< external forces (may be empty)
+  Vec3 gravity = Vec3::Zero();        ///< m/s^2; zero = off ("gravity": true gives (0, -9.81, 0))
+  CaseSolverSettings solver;          ///< the "solver" section
   /// The "fracture" section (crack, cut and plasticity options); used by `shatter static --fracture`.
   FractureOptions fracture;
   bool fracture_given = false;  ///< the case has a "fracture" section

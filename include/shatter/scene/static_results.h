@@ -13,6 +13,7 @@
 
 namespace shatter {
 
+/// Displacements and per-tet stresses of one equilibrium.
 struct StaticResults {
   std::vector<Vec3> displacement;     ///< x - rest position, m (#nodes)
   std::vector<Mat3> stress;           ///< Cauchy stress, Pa (#tets)
@@ -24,8 +25,8 @@ struct StaticResults {
   double max_displacement = 0;       ///< m
   Index max_principal_tet = -1;      ///< tet of largest principal stress (lowest index on ties)
   double max_principal_stress = 0;   ///< Pa
-  Index max_von_mises_tet = -1;
-  double max_von_mises = 0;  ///< Pa
+  Index max_von_mises_tet = -1;      ///< tet of largest von Mises stress (lowest index on ties)
+  double max_von_mises = 0;          ///< Pa
 };
 
 /// Displacements and stresses (by compute_stresses, fracture/stress.h) at the deformed positions x

@@ -15,16 +15,19 @@
 
 namespace shatter {
 
+/// The linear solver used for Newton's system.
 enum class LinearSolverKind {
   direct_ldlt,             ///< Eigen::SimplicialLDLT, AMD ordering; analyzePattern once per pattern
   pcg_block_jacobi,        ///< CG preconditioned by the inverse 3x3 diagonal blocks
   pcg_block_gauss_seidel,  ///< CG preconditioned by one forward + one backward block Gauss-Seidel
                            ///< sweep (M = (D+L) D^-1 (D+U): symmetric positive definite)
 };
+/// "direct", "pcg-jacobi" or "pcg-gauss-seidel".
 const char* to_string(LinearSolverKind kind);
 /// "direct", "pcg-jacobi", "pcg-gauss-seidel" (as written by to_string).
 Result<LinearSolverKind> parse_linear_solver_kind(std::string_view name);
 
+/// Settings of a LinearSolver.
 struct LinearSolverOptions {
   /// Default by measurement (docs/solver.md): on the anchored impact systems PCG with symmetric
   /// block Gauss-Seidel beats the factorization at a few hundred free DOFs and is 4-5x faster at
@@ -39,8 +42,9 @@ struct LinearSolverOptions {
   bool warm_start = false;
 };
 
+/// How one linear solve went.
 struct LinearSolveReport {
-  bool converged = false;
+  bool converged = false;        ///< within the tolerance (direct: factorization and solve succeeded)
   int iterations = 0;            ///< PCG iterations (0 for the direct solver)
   double relative_residual = 0;  ///< ||b - A x|| / ||b|| (0 when b = 0)
   double time_ms = 0;            ///< wall time of the whole solve, ms
@@ -51,13 +55,18 @@ struct LinearSolveReport {
 /// A reusable solver: keeps the symbolic factorization (per pattern_id) and the work vectors.
 class LinearSolver {
  public:
+  /// A solver with `options` and no factorization yet.
   explicit LinearSolver(const LinearSolverOptions& options = {}) : options_(options) {}
 
+  /// The current settings.
   [[nodiscard]] const LinearSolverOptions& options() const { return options_; }
+  /// Change the settings (a kept symbolic analysis stays valid).
   void set_options(const LinearSolverOptions& options) { options_ = options; }
 
   /// Solve A x = b (b, x: a.size()). x is the initial guess when options().warm_start, else it is
-  /// overwritten. Never leaves non-finite values in x: on failure x is zero and converged false.
+  /// overwritten. Never leaves non-finite values in x: when the solve fails outright (bad b, failed
+  /// factorization, a diagonal block not positive definite, a non-finite result) x is zero; PCG that
+  /// stops early (iteration limit, CG breakdown) leaves its last iterate. converged is false then.
   LinearSolveReport solve(const BlockSparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x);
 
   /// Symbolic analyses done so far (the direct solver does one per new pattern).

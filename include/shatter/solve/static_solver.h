@@ -30,6 +30,7 @@ struct StaticProblem {
   Vec3 gravity_vector = Vec3(0, -9.81, 0);  ///< m/s^2
 };
 
+/// Settings of the Newton solver.
 struct StaticSolverOptions {
   int max_newton_iterations = 20;  ///< per load step
   /// Converged when ||f_ext - F(x)|| over the free components <= tol * reference, reference =
@@ -50,6 +51,8 @@ struct StaticSolverOptions {
   /// (r.d)/(d.K d) (the energy-norm optimal multiple: never a worse start than zero). Repeated
   /// impacts at one place with other magnitudes then need few iterations.
   bool warm_start = true;
+  /// The linear solver of each Newton step. Its relative_tolerance is a floor (the Newton solver
+  /// loosens it as its own tolerance allows); its warm_start is replaced by the one above.
   LinearSolverOptions linear;
 };
 
@@ -77,18 +80,19 @@ enum class SolveStatus {
 /// "linear-solve-failed".
 const char* to_string(SolveStatus status);
 
+/// How a static solve went.
 struct StaticReport {
-  bool converged = false;           ///< status == SolveStatus::converged
-  int newton_iterations = 0;        ///< Newton iterations over all load steps
-  double relative_residual = 0;     ///< at the returned x, as in the tolerance
-  int load_steps = 0;               ///< load steps completed
-  double load_fraction = 0;         ///< fraction of the load in equilibrium at the returned x
-  int linear_iterations_total = 0;  ///< PCG iterations over all Newton iterations
-  int line_search_cuts = 0;         ///< step halvings by the line search
-  double assembly_ms = 0;           ///< stiffness refills (and the pattern when built)
-  double linear_solve_ms = 0;       ///< linear solves (factorizations, PCG)
-  double force_ms = 0;              ///< internal forces and energies
-  double total_ms = 0;
+  bool converged = false;                            ///< status == SolveStatus::converged
+  int newton_iterations = 0;                         ///< Newton iterations over all load steps
+  double relative_residual = 0;                      ///< at the returned x, as in the tolerance
+  int load_steps = 0;                                ///< load steps completed
+  double load_fraction = 0;                          ///< fraction of the load in equilibrium at the returned x
+  int linear_iterations_total = 0;                   ///< PCG iterations over all Newton iterations
+  int line_search_cuts = 0;                          ///< step halvings by the line search
+  double assembly_ms = 0;                            ///< stiffness refills (and the pattern when built), ms
+  double linear_solve_ms = 0;                        ///< linear solves (factorizations, PCG), ms
+  double force_ms = 0;                               ///< internal forces and energies, ms
+  double total_ms = 0;                               ///< the whole solve, ms
   SolveStatus status = SolveStatus::no_convergence;  ///< how it ended (a default report has not converged)
   std::string message;                               ///< why it did not converge ("" when it did)
 };
@@ -96,9 +100,12 @@ struct StaticReport {
 /// Keeps what can be reused between solves with the same tets and anchors.
 class StaticSolver {
  public:
+  /// A solver with `options` and no pattern yet.
   explicit StaticSolver(const StaticSolverOptions& options = {});
 
+  /// The current settings.
   [[nodiscard]] const StaticSolverOptions& options() const { return options_; }
+  /// Change the settings (the kept pattern and symbolic analysis stay).
   void set_options(const StaticSolverOptions& options);
 
   /// x: initial guess (usually the rest positions), m (#nodes); receives the solution. Returns an
@@ -109,6 +116,7 @@ class StaticSolver {
 
   /// Times the sparse pattern was (re)built; stays put while tets and anchors do not change.
   [[nodiscard]] int pattern_builds() const { return pattern_builds_; }
+  /// The linear solver (symbolic analyses done so far).
   [[nodiscard]] const LinearSolver& linear_solver() const { return linear_; }
   /// The stiffness of the last Newton iteration (empty before the first solve).
   [[nodiscard]] const BlockSparseMatrix& matrix() const { return matrix_; }
