@@ -108,8 +108,11 @@ class [[nodiscard]] Result<void> {
 };
 
 /// Propagate an error: `SHATTER_TRY(r, expr);` declares r, returns its error if it failed.
+/// (var names a new variable, so it cannot be parenthesised.)
+// NOLINTBEGIN(bugprone-macro-parentheses)
 #define SHATTER_TRY(var, expr) \
   auto var = (expr);           \
   if (!var.ok()) return std::move(var.error())
+// NOLINTEND(bugprone-macro-parentheses)
 
 }  // namespace shatter

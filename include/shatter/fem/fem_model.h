@@ -49,7 +49,7 @@ struct FemModel {
 
 /// Builds the model from the rest mesh (positively oriented tets). The material is not validated
 /// here (see validate_material).
-FemModel make_fem_model(const TetMesh& rest_mesh, const Material& material, ModelKind model);
+FemModel make_fem_model(const TetMesh& rest_mesh, const Material& material, ModelKind kind);
 
 /// Replace the rest shape of tet e (plasticity: m := x, docs/method.md §2.4): updates rest[e] and the
 /// fast path's data; node masses are kept (mass is conserved). Changing `tets` needs a new model.

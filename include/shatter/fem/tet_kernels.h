@@ -53,7 +53,7 @@ struct Principal {
 /// eigenvalues such as diag(a,a,b) or a*I), accurate to round-off otherwise. Sign rule: the
 /// largest-magnitude component of columns 0 and 1 is positive (first such index on ties); column 2
 /// = column 0 x column 1. Only the upper triangle of `symmetric` is read.
-Principal principal_stresses(const Mat3& symmetric);
+Principal principal_stresses(const Mat3& m);
 /// von Mises equivalent stress, Pa: sqrt(3/2 s:s) with s the deviatoric part of sigma.
 double von_mises(const Mat3& sigma);
 

@@ -128,9 +128,9 @@ class Sdf {
 Mat3 rotation_from_euler_deg(const Vec3& degrees);
 
 /// Signed distance from p to a closed polygon (Quilez's sdPolygon): < 0 inside (even-odd rule).
-double polygon_signed_distance(const std::vector<Vec2>& polygon, const Vec2& p);
+double polygon_signed_distance(const std::vector<Vec2>& v, const Vec2& p);
 /// Signed area of a closed polygon (> 0 counter-clockwise), m^2.
-double polygon_area(const std::vector<Vec2>& polygon);
+double polygon_area(const std::vector<Vec2>& v);
 
 /// Checks for polygons used by revolution/extrusion: >= 3 points, finite, non-zero area, for
 /// revolution r >= 0. `field` names the parameter in the error.

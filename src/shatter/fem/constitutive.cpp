@@ -52,7 +52,7 @@ const char* to_string(ModelKind kind) {
 Polar polar_decomposition(const Mat3& F) {
   const Eigen::JacobiSVD<Mat3> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Mat3 U = svd.matrixU();
-  const Mat3 V = svd.matrixV();
+  const Mat3& V = svd.matrixV();
   // Singular values come sorted descending; for det(U V^T) < 0 flip the smallest one's direction.
   if ((U * V.transpose()).determinant() < 0) U.col(2) = -U.col(2);
   Polar p;

@@ -10,9 +10,9 @@
 
 namespace shatter {
 
-TetRest tet_rest(const Mat34& m) {
+TetRest tet_rest(const Mat34& rest_corners) {
   Mat3 Dm;
-  for (int k = 0; k < 3; ++k) Dm.col(k) = m.col(k + 1) - m.col(0);
+  for (int k = 0; k < 3; ++k) Dm.col(k) = rest_corners.col(k + 1) - rest_corners.col(0);
   TetRest r;
   r.Dm_inv = Dm.inverse();
   r.volume = Dm.determinant() / 6.0;

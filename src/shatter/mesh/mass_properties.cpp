@@ -21,7 +21,7 @@ MassProperties mass_properties(const TetMesh& mesh, double density) {
     volume += v;
     first += v / 4.0 * s;
     Mat3 c = s * s.transpose();
-    for (int k = 0; k < 4; ++k) c += r[k] * r[k].transpose();
+    for (const Vec3& rk : r) c += rk * rk.transpose();
     second += v / 20.0 * c;
   }
   m.volume = volume;

@@ -74,7 +74,8 @@ Grid make_grid(const Sdf& sdf, const std::vector<Aabb>& boxes) {
       if (merged.empty() || v - merged.back() > tol) merged.push_back(v);
     g.coords[a] = std::move(merged);
   }
-  g.inside.assign(static_cast<std::size_t>(g.n(0) * g.n(1) * g.n(2)), 0);
+  g.inside.assign(
+      static_cast<std::size_t>(g.n(0)) * static_cast<std::size_t>(g.n(1)) * static_cast<std::size_t>(g.n(2)), 0);
   for (Index k = 0; k < g.n(2); ++k)
     for (Index j = 0; j < g.n(1); ++j)
       for (Index i = 0; i < g.n(0); ++i) {

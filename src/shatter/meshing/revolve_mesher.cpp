@@ -41,7 +41,8 @@ std::vector<Vec2> resample(const std::vector<Vec2>& poly, double h) {
   std::vector<Vec2> out;
   const std::size_t n = poly.size();
   for (std::size_t i = 0; i < n; ++i) {
-    const Vec2 a = poly[i], b = poly[(i + 1) % n];
+    const Vec2& a = poly[i];
+    const Vec2& b = poly[(i + 1) % n];
     const double len = (b - a).norm();
     if (!(len > 1e-12 * scale)) continue;
     const auto pieces = std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(len / h - 1e-9)));

@@ -154,8 +154,8 @@ struct Sharpener {
       b += nrm[i] * nrm[i].dot(pts[i] - xv);
     }
     Eigen::SelfAdjointEigenSolver<Mat3> es(A);
-    const Vec3 lam = es.eigenvalues();
-    const Mat3 U = es.eigenvectors();
+    const Vec3& lam = es.eigenvalues();
+    const Mat3& U = es.eigenvectors();
     Vec3 dx = Vec3::Zero();
     for (int k = 0; k < 3; ++k)
       if (lam[k] > 0.1 * lam[2]) dx += U.col(k) * (U.col(k).dot(b) / lam[k]);

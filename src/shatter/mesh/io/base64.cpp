@@ -67,7 +67,7 @@ bool base64_decode(std::string_view text, std::string& out, std::size_t& bad_pos
       n = 0;
       continue;
     }
-    const int v = kTable[static_cast<unsigned char>(c)];
+    const int v = kTable[static_cast<unsigned char>(c)];  // NOLINT(bugprone-signed-char-misuse): -1 or 0..63
     if (v < 0) {
       bad_pos = i;
       return false;

@@ -201,7 +201,7 @@ class MshReader {
       ++at;
     }
     (void)c_.take_bytes(at + end.size(), "skipped section");
-    skipped_sections_.push_back(std::string(tok));
+    skipped_sections_.emplace_back(tok);
     return {};
   }
 

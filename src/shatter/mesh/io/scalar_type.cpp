@@ -78,7 +78,7 @@ Result<Scalar> read_scalar(ByteCursor& b, ScalarType t, const char* what) {
   switch (t) {
     case ScalarType::i8: {
       SHATTER_TRY(x, b.u8(what));
-      v.i = static_cast<std::int8_t>(*x);
+      v.i = static_cast<std::int8_t>(*x);  // NOLINT(bugprone-signed-char-misuse): the byte is a signed int8
       break;
     }
     case ScalarType::u8: {
