@@ -113,9 +113,13 @@ TEST(Stuffing, RandomShapesGiveValidMeshes) {
         case 0: parts.push_back(Sdf::sphere(rng.uniform(0.04, 0.08)).translated(t)); break;
         case 1: parts.push_back(Sdf::box(rng.uniform_vec3(0.03, 0.07)).transformed(t, r)); break;
         case 2: parts.push_back(Sdf::ellipsoid(rng.uniform_vec3(0.03, 0.08)).transformed(t, r)); break;
-        default:
-          parts.push_back(Sdf::cylinder(rng.uniform(0.03, 0.06), rng.uniform(0.03, 0.08)).transformed(t, r));
+        default: {
+          // Named draws fix the order (function arguments are evaluated in an unspecified order).
+          const double half_height = rng.uniform(0.03, 0.08);
+          const double radius = rng.uniform(0.03, 0.06);
+          parts.push_back(Sdf::cylinder(radius, half_height).transformed(t, r));
           break;
+        }
       }
     }
     const Sdf shape = (trial % 2) ? Sdf::smooth_unite(parts, 0.02) : Sdf::unite(parts);

@@ -117,7 +117,11 @@ TEST(Assembly, StiffnessRefillEqualsElementTriplets) {
   const FemModel model = make_fem_model(mesh, test::test_material(), ModelKind::stvk);
   Random rng(9);
   std::vector<Vec3> x = mesh.positions;
-  for (Vec3& p : x) p += 0.02 * Vec3(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0));
+  for (Vec3& p : x) {
+    // Named draws fix the order (constructor arguments are evaluated in an unspecified order).
+    const double dz = rng.uniform(-1.0, 1.0), dy = rng.uniform(-1.0, 1.0), dx = rng.uniform(-1.0, 1.0);
+    p += 0.02 * Vec3(dx, dy, dz);
+  }
   const std::vector<AnchorMask> anchors = mixed_anchors(mesh);
   BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, anchors);
   // Exact stiffness: equals the triplet assembly of tet_stiffness.
