@@ -3,11 +3,16 @@
 # only what is missing and says what it installs. Needs root or sudo.
 #   scripts/setup.sh          build + test dependencies
 #   scripts/setup.sh --fuzz   also clang-19 and its libFuzzer runtime
+#   scripts/setup.sh --tsan   also clang-19, its TSan runtime, LLVM's OpenMP runtime with the Archer
+#                             tool (libomp-19-dev) and llvm-symbolizer (llvm-19), for the tsan preset
+# The flags combine (scripts/test.sh passes both).
 set -euo pipefail
 
 packages=(
   # toolchain
   g++ cmake ninja-build ccache pkg-config
+  # layout and lint checks (scripts/format.sh, scripts/tidy.sh)
+  clang-format-19 clang-tidy-19
   # core library
   libeigen3-dev libxxhash-dev
   # tools
@@ -15,9 +20,15 @@ packages=(
   # tests and benchmarks; independent references the tests compare against
   libgtest-dev libgmock-dev libbenchmark-dev python3 python3-meshio calculix-ccx
 )
-if [[ "${1:-}" == "--fuzz" ]]; then
-  packages+=(clang-19 libclang-rt-19-dev)
-fi
+for arg in "$@"; do
+  case "$arg" in
+    --fuzz) packages+=(clang-19 libclang-rt-19-dev) ;;
+    --tsan) packages+=(clang-19 libclang-rt-19-dev libomp-19-dev llvm-19) ;;
+    *) echo "setup: unknown option $arg (expected --fuzz and/or --tsan)" >&2; exit 2 ;;
+  esac
+done
+# Each package once (--fuzz and --tsan share clang-19).
+mapfile -t packages < <(printf '%s\n' "${packages[@]}" | awk '!seen[$0]++')
 
 missing=()
 for p in "${packages[@]}"; do

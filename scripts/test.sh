@@ -1,15 +1,24 @@
 #!/usr/bin/env bash
 # Install what is missing, build, and run the whole test suite:
+#   0. layout (.clang-format) of every C++ file; after the release build, clang-tidy (.clang-tidy)
+#      over the library and tool sources;
 #   1. release build, all tests (unit, property, cross-checks against meshio and CalculiX);
 #   2. the same tests under AddressSanitizer + UBSan;
-#   3. every libFuzzer target for a short time (SHATTER_FUZZ_SECONDS, default 20) from its corpus;
-#   4. find_package(shatter) from a separate project against an installed copy.
+#   3. the tests of the threaded code (labels core, fem, solve, fracture, meshing) under
+#      ThreadSanitizer, no suppressions: clang-19 with LLVM's libomp, whose Archer tool shows
+#      OpenMP's own synchronisation to TSan (GCC's libgomp is not instrumented: false races).
+#      Left out there: CmdMesh.* (needs the CLI, not built for this stage);
+#   4. every libFuzzer target for a short time (SHATTER_FUZZ_SECONDS, default 20) from its corpus;
+#   5. find_package(shatter) from a separate project against an installed copy.
 # Set SHATTER_QUICK=1 to run step 1 only.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
 
-scripts/setup.sh --fuzz
+scripts/setup.sh --fuzz --tsan
+
+echo "== layout"
+scripts/format.sh --check
 
 echo "== release build and tests"
 cmake --preset release >/dev/null
@@ -18,10 +27,18 @@ ctest --preset release -j "$jobs"
 
 if [[ "${SHATTER_QUICK:-0}" == "1" ]]; then exit 0; fi
 
+echo "== clang-tidy"
+scripts/tidy.sh build/release
+
 echo "== asan-ubsan build and tests"
 cmake --preset asan-ubsan >/dev/null
 cmake --build --preset asan-ubsan -j "$jobs"
 ctest --preset asan-ubsan -j "$jobs"
+
+echo "== thread sanitizer build and threaded tests"
+cmake --preset tsan >/dev/null
+cmake --build --preset tsan -j "$jobs"
+ctest --preset tsan -j "$jobs"
 
 echo "== fuzzing"
 scripts/fuzz.sh "${SHATTER_FUZZ_SECONDS:-20}"
