@@ -52,6 +52,9 @@
 #include "shatter/rigid/body.h"
 #include "shatter/rigid/integrate.h"
 
+// Collision detection: the broad phase.
+#include "shatter/collide/broad_phase.h"
+
 // Static analysis of a mesh under a load case, and its result files.
 #include "shatter/scene/static_analysis.h"
 #include "shatter/scene/static_case.h"

@@ -7,7 +7,9 @@
 #include <string>
 #include <string_view>
 
+#include "shatter/core/error.h"
 #include "shatter/mesh/io/io_util.h"
+#include "shatter/mesh/io/mesh_io.h"
 #include "shatter/mesh/tet_mesh.h"
 
 namespace shatter::io {
@@ -58,5 +60,10 @@ Index drop_unused_nodes(TetMesh& mesh);
 
 /// "12 triangles" / "1 triangle".
 std::string count_phrase(std::int64_t n, std::string_view singular, std::string_view plural);
+
+/// Checks a mesh and its fields before a writer that stores attributes and fields (VTK, VTU):
+/// attribute arrays of the right length, fields of (#nodes or #tets) x components values, tet node
+/// indices in range. Messages start with `writer` ("write_vtk").
+Result<void> check_mesh_for_writing(std::string_view writer, const TetMesh& mesh, const MeshWriteOptions& options);
 
 }  // namespace shatter::io

@@ -362,31 +362,7 @@ Result<MeshReadResult> parse_vtu(std::string_view bytes, const std::string& name
 Result<void> write_vtu(std::ostream& out, const TetMesh& mesh, const MeshWriteOptions& options) {
   static_assert(std::endian::native == std::endian::little, "the VTU writer assumes a little-endian machine");
   const Index nn = mesh.num_nodes(), ne = mesh.num_tets();
-  auto bad_size = [](const std::string& what, std::size_t got, std::size_t want) {
-    return make_error("write_vtu: " + what + " has " + std::to_string(got) + " values, expected " +
-                      std::to_string(want));
-  };
-  if (!mesh.node_ids.empty() && mesh.node_ids.size() != static_cast<std::size_t>(nn))
-    return bad_size("node_ids", mesh.node_ids.size(), nn);
-  if (!mesh.node_tags.empty() && mesh.node_tags.size() != static_cast<std::size_t>(nn))
-    return bad_size("node_tags", mesh.node_tags.size(), nn);
-  if (!mesh.tet_ids.empty() && mesh.tet_ids.size() != static_cast<std::size_t>(ne))
-    return bad_size("tet_ids", mesh.tet_ids.size(), ne);
-  if (!mesh.tet_tags.empty() && mesh.tet_tags.size() != static_cast<std::size_t>(ne))
-    return bad_size("tet_tags", mesh.tet_tags.size(), ne);
-  for (const MeshField& f : options.fields.node_fields)
-    if (f.components < 1 || f.values.size() != static_cast<std::size_t>(nn) * static_cast<std::size_t>(f.components))
-      return bad_size("node field " + f.name, f.values.size(),
-                      static_cast<std::size_t>(nn) * static_cast<std::size_t>(std::max(f.components, 1)));
-  for (const MeshField& f : options.fields.tet_fields)
-    if (f.components < 1 || f.values.size() != static_cast<std::size_t>(ne) * static_cast<std::size_t>(f.components))
-      return bad_size("tet field " + f.name, f.values.size(),
-                      static_cast<std::size_t>(ne) * static_cast<std::size_t>(std::max(f.components, 1)));
-  for (Index e = 0; e < ne; ++e)
-    for (Index v : mesh.tets[e])
-      if (v < 0 || v >= nn)
-        return make_error("write_vtu: tet " + std::to_string(mesh.tet_id(e)) + " has node index " + std::to_string(v) +
-                          " out of range");
+  if (auto ok = io::check_mesh_for_writing("write_vtu", mesh, options); !ok) return ok;
 
   io::WriteBuffer w(out);
   ArrayWriter a(w, options.binary);
