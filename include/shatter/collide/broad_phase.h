@@ -8,6 +8,7 @@
 // for any hash table size.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -36,13 +37,39 @@ struct BroadPhaseStats {
 /// Two boxes overlap (closed intervals: touching counts).
 bool boxes_overlap(const Aabb& a, const Aabb& b);
 
-/// Pairs (i, j), i < j, of overlapping non-empty boxes, sorted. `boxes`: one per body (#bodies);
-/// empty boxes take part in no pair.
-std::vector<std::pair<Index, Index>> find_overlapping_pairs(const std::vector<Aabb>& boxes,
-                                                            const BroadPhaseOptions& options = {},
-                                                            BroadPhaseStats* stats = nullptr);
+/// A pair of body indices, first < second.
+using BodyPair = std::pair<Index, Index>;
+
+/// The grid with its buffers kept between queries (a step's query then allocates nothing once the
+/// buffers have grown to the scene).
+class BroadPhase {
+ public:
+  /// Pairs (i, j), i < j, of overlapping non-empty boxes, sorted. `boxes`: one per body
+  /// (#bodies); empty or non-finite boxes take part in no pair. Valid until the next call.
+  const std::vector<BodyPair>& find_pairs(const std::vector<Aabb>& boxes, const BroadPhaseOptions& options = {});
+  /// What the last query did.
+  [[nodiscard]] const BroadPhaseStats& stats() const { return stats_; }
+
+ private:
+  /// One (box, cell) entry: cell coordinates (|c| < 2^21 by the cell-size floor) and the body.
+  struct Entry {
+    std::array<std::int32_t, 3> cell;
+    Index body;
+  };
+  std::vector<Entry> entries_, sorted_;
+  std::vector<std::uint32_t> bucket_;  ///< hash bucket of each entry (#entries)
+  std::vector<std::uint32_t> start_;   ///< first sorted entry of each bucket (#buckets + 1)
+  std::vector<Index> large_;           ///< boxes kept out of the grid
+  std::vector<char> is_large_;         ///< per box (#bodies)
+  std::vector<BodyPair> pairs_;
+  BroadPhaseStats stats_;
+};
+
+/// One query with a grid of its own (see BroadPhase::find_pairs).
+std::vector<BodyPair> find_overlapping_pairs(const std::vector<Aabb>& boxes, const BroadPhaseOptions& options = {},
+                                             BroadPhaseStats* stats = nullptr);
 
 /// The same by testing every pair (for tests and tiny scenes).
-std::vector<std::pair<Index, Index>> find_overlapping_pairs_brute_force(const std::vector<Aabb>& boxes);
+std::vector<BodyPair> find_overlapping_pairs_brute_force(const std::vector<Aabb>& boxes);
 
 }  // namespace shatter

@@ -10,11 +10,6 @@ namespace {
 
 using Cell = std::array<std::int64_t, 3>;
 
-struct Entry {
-  Cell cell;
-  Index body = -1;
-};
-
 bool valid_box(const Aabb& b) { return !b.empty() && b.min.allFinite() && b.max.allFinite(); }
 
 // Cell coordinates of p. Monotone in p (subtraction and division by h > 0 are), so the cell of a
@@ -49,10 +44,11 @@ bool boxes_overlap(const Aabb& a, const Aabb& b) {
   return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
 }
 
-std::vector<std::pair<Index, Index>> find_overlapping_pairs(const std::vector<Aabb>& boxes,
-                                                            const BroadPhaseOptions& options, BroadPhaseStats* stats) {
-  BroadPhaseStats st;
-  std::vector<std::pair<Index, Index>> pairs;
+const std::vector<BodyPair>& BroadPhase::find_pairs(const std::vector<Aabb>& boxes, const BroadPhaseOptions& options) {
+  stats_ = {};
+  pairs_.clear();
+  entries_.clear();
+  large_.clear();
   const auto n = static_cast<Index>(boxes.size());
   Aabb scene;
   for (const Aabb& b : boxes)
@@ -60,22 +56,17 @@ std::vector<std::pair<Index, Index>> find_overlapping_pairs(const std::vector<Aa
       scene.extend(b.min);
       scene.extend(b.max);
     }
-  if (scene.empty()) {
-    if (stats) *stats = st;
-    return pairs;
-  }
+  if (scene.empty()) return pairs_;
   // Cell size: given, else the median largest extent; never so small that the scene spans more
   // than 2^20 cells along an axis (points and slivers), never zero.
   double h = options.cell_size > 0 ? options.cell_size : median_extent(boxes);
   const double span = scene.extent().maxCoeff();
   h = std::max(h, span * std::ldexp(1.0, -20));
   if (!(h > 0)) h = 1.0;
-  st.cell_size = h;
+  stats_.cell_size = h;
 
   // Entries (box, cell) in body order; boxes over too many cells go to the large list.
-  std::vector<Entry> entries;
-  std::vector<Index> large;
-  std::vector<char> is_large(boxes.size(), 0);
+  is_large_.assign(boxes.size(), 0);
   for (Index i = 0; i < n; ++i) {
     const Aabb& b = boxes[static_cast<std::size_t>(i)];
     if (!valid_box(b)) continue;
@@ -83,67 +74,78 @@ std::vector<std::pair<Index, Index>> find_overlapping_pairs(const std::vector<Aa
     const double cells = static_cast<double>(hi[0] - lo[0] + 1) * static_cast<double>(hi[1] - lo[1] + 1) *
                          static_cast<double>(hi[2] - lo[2] + 1);
     if (cells > static_cast<double>(options.max_cells_per_box)) {
-      large.push_back(i);
-      is_large[static_cast<std::size_t>(i)] = 1;
+      large_.push_back(i);
+      is_large_[static_cast<std::size_t>(i)] = 1;
       continue;
     }
     for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
       for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
-        for (std::int64_t x = lo[0]; x <= hi[0]; ++x) entries.push_back({{x, y, z}, i});
+        for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
+          entries_.push_back(
+              {{static_cast<std::int32_t>(x), static_cast<std::int32_t>(y), static_cast<std::int32_t>(z)}, i});
   }
-  st.entries = static_cast<std::int64_t>(entries.size());
-  st.large_boxes = static_cast<std::int64_t>(large.size());
+  stats_.entries = static_cast<std::int64_t>(entries_.size());
+  stats_.large_boxes = static_cast<std::int64_t>(large_.size());
 
   // Counting sort by hash bucket (stable: within a bucket, entries keep body order).
   std::size_t table = 1;
-  while (table < 2 * entries.size()) table *= 2;
-  std::vector<std::size_t> start(table + 1, 0);
-  std::vector<std::size_t> bucket(entries.size());
-  for (std::size_t k = 0; k < entries.size(); ++k) {
-    bucket[k] = static_cast<std::size_t>(cell_hash(entries[k].cell) & (table - 1));
-    ++start[bucket[k] + 1];
+  while (table < 2 * entries_.size()) table *= 2;
+  start_.assign(table + 1, 0);
+  bucket_.resize(entries_.size());
+  for (std::size_t k = 0; k < entries_.size(); ++k) {
+    const auto& cell = entries_[k].cell;
+    bucket_[k] = static_cast<std::uint32_t>(cell_hash({cell[0], cell[1], cell[2]}) & (table - 1));
+    ++start_[bucket_[k] + 1];
   }
-  for (std::size_t b = 0; b < table; ++b) start[b + 1] += start[b];
-  std::vector<Entry> sorted(entries.size());
-  {
-    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
-    for (std::size_t k = 0; k < entries.size(); ++k) sorted[fill[bucket[k]]++] = entries[k];
-  }
+  for (std::size_t b = 0; b < table; ++b) start_[b + 1] += start_[b];
+  sorted_.resize(entries_.size());
+  for (std::size_t k = 0; k < entries_.size(); ++k) sorted_[start_[bucket_[k]]++] = entries_[k];
+  // start_[b] now holds the end of bucket b, which is the start of bucket b + 1: shift back.
+  for (std::size_t b = table; b > 0; --b) start_[b] = start_[b - 1];
+  start_[0] = 0;
 
   // Pairs within each bucket that share a cell, reported from the cell of their overlap's lowest
   // corner only.
   for (std::size_t b = 0; b < table; ++b) {
-    for (std::size_t p = start[b]; p < start[b + 1]; ++p) {
-      const Entry& e = sorted[p];
-      for (std::size_t q = p + 1; q < start[b + 1]; ++q) {
-        const Entry& f = sorted[q];
+    for (std::size_t p = start_[b]; p < start_[b + 1]; ++p) {
+      const Entry& e = sorted_[p];
+      for (std::size_t q = p + 1; q < start_[b + 1]; ++q) {
+        const Entry& f = sorted_[q];
         if (f.cell != e.cell || f.body == e.body) continue;
         const Aabb& a = boxes[static_cast<std::size_t>(e.body)];
         const Aabb& c = boxes[static_cast<std::size_t>(f.body)];
-        ++st.box_tests;
+        ++stats_.box_tests;
         if (!boxes_overlap(a, c)) continue;
-        if (cell_of(a.min.cwiseMax(c.min), scene.min, h) != e.cell) continue;
-        pairs.emplace_back(std::min(e.body, f.body), std::max(e.body, f.body));
+        const Cell corner = cell_of(a.min.cwiseMax(c.min), scene.min, h);
+        if (corner[0] != e.cell[0] || corner[1] != e.cell[1] || corner[2] != e.cell[2]) continue;
+        pairs_.emplace_back(std::min(e.body, f.body), std::max(e.body, f.body));
       }
     }
   }
   // Large boxes against every other box (a pair of large boxes once).
-  for (Index i : large) {
+  for (Index i : large_) {
     for (Index j = 0; j < n; ++j) {
       if (j == i || !valid_box(boxes[static_cast<std::size_t>(j)])) continue;
-      if (is_large[static_cast<std::size_t>(j)] && j < i) continue;
-      ++st.box_tests;
+      if (is_large_[static_cast<std::size_t>(j)] && j < i) continue;
+      ++stats_.box_tests;
       if (boxes_overlap(boxes[static_cast<std::size_t>(i)], boxes[static_cast<std::size_t>(j)]))
-        pairs.emplace_back(std::min(i, j), std::max(i, j));
+        pairs_.emplace_back(std::min(i, j), std::max(i, j));
     }
   }
-  std::sort(pairs.begin(), pairs.end());
-  if (stats) *stats = st;
+  std::sort(pairs_.begin(), pairs_.end());
+  return pairs_;
+}
+
+std::vector<BodyPair> find_overlapping_pairs(const std::vector<Aabb>& boxes, const BroadPhaseOptions& options,
+                                             BroadPhaseStats* stats) {
+  BroadPhase grid;
+  std::vector<BodyPair> pairs = grid.find_pairs(boxes, options);
+  if (stats) *stats = grid.stats();
   return pairs;
 }
 
-std::vector<std::pair<Index, Index>> find_overlapping_pairs_brute_force(const std::vector<Aabb>& boxes) {
-  std::vector<std::pair<Index, Index>> pairs;
+std::vector<BodyPair> find_overlapping_pairs_brute_force(const std::vector<Aabb>& boxes) {
+  std::vector<BodyPair> pairs;
   const auto n = static_cast<Index>(boxes.size());
   for (Index i = 0; i < n; ++i) {
     if (!valid_box(boxes[static_cast<std::size_t>(i)])) continue;
