@@ -18,58 +18,53 @@ Aabb cube(const Vec3& c, double half) {
   return b;
 }
 
-// Ground slab, then `n` pieces of 2-10 cm.
-std::vector<Aabb> resting(int n) {
-  Random rng(1);
+// A ground slab (half-width `ground`, top at y = 0) under `n` cubes of half-size in [lo, hi],
+// centred by place(rng, half).
+template <class Place>
+std::vector<Aabb> scene(int n, double ground, std::uint64_t seed, double lo, double hi, Place&& place) {
+  Random rng(seed);
   std::vector<Aabb> boxes;
-  Aabb ground;
-  ground.extend(Vec3(-6, -0.5, -6));
-  ground.extend(Vec3(6, 0, 6));
-  boxes.push_back(ground);
+  Aabb slab;
+  slab.extend(Vec3(-ground, -0.5, -ground));
+  slab.extend(Vec3(ground, 0, ground));
+  boxes.push_back(slab);
   for (int i = 0; i < n; ++i) {
-    const double half = rng.uniform(0.01, 0.05);
-    boxes.push_back(cube(Vec3(rng.uniform(-5, 5), half, rng.uniform(-5, 5)), half));
+    const double half = rng.uniform(lo, hi);
+    boxes.push_back(cube(place(rng, half), half));
   }
   return boxes;
+}
+
+// `n` pieces of 2-10 cm resting on the ground over 10 x 10 m.
+std::vector<Aabb> resting(int n) {
+  return scene(n, 6, 1, 0.01, 0.05,
+               [](Random& rng, double half) { return Vec3(rng.uniform(-5, 5), half, rng.uniform(-5, 5)); });
 }
 
 // `n` bodies of 10-20 cm packed in a 1 m cube above the ground.
 std::vector<Aabb> pile(int n) {
-  Random rng(2);
-  std::vector<Aabb> boxes;
-  Aabb ground;
-  ground.extend(Vec3(-3, -0.5, -3));
-  ground.extend(Vec3(3, 0, 3));
-  boxes.push_back(ground);
-  for (int i = 0; i < n; ++i) {
-    const double half = rng.uniform(0.05, 0.1);
-    boxes.push_back(cube(Vec3(rng.uniform(-0.5, 0.5), rng.uniform(0.0, 1.0), rng.uniform(-0.5, 0.5)), half));
+  return scene(n, 3, 2, 0.05, 0.1, [](Random& rng, double) {
+    return Vec3(rng.uniform(-0.5, 0.5), rng.uniform(0.0, 1.0), rng.uniform(-0.5, 0.5));
+  });
+}
+
+// One broad-phase query per iteration; the grid keeps its buffers between steps, as in a simulation.
+void run_broad_phase(benchmark::State& state, const std::vector<Aabb>& boxes) {
+  BroadPhase grid;
+  std::size_t pairs = 0;
+  for (auto _ : state) {
+    pairs = grid.find_pairs(boxes).size();
+    benchmark::DoNotOptimize(pairs);
   }
-  return boxes;
+  state.counters["pairs"] = static_cast<double>(pairs);
 }
 
 void BM_BroadPhaseResting(benchmark::State& state) {
-  const std::vector<Aabb> boxes = resting(static_cast<int>(state.range(0)));
-  BroadPhase grid;  // buffers kept between steps, as in a simulation
-  std::size_t pairs = 0;
-  for (auto _ : state) {
-    pairs = grid.find_pairs(boxes).size();
-    benchmark::DoNotOptimize(pairs);
-  }
-  state.counters["pairs"] = static_cast<double>(pairs);
+  run_broad_phase(state, resting(static_cast<int>(state.range(0))));
 }
 BENCHMARK(BM_BroadPhaseResting)->Arg(1000)->Arg(10000)->Unit(benchmark::kMicrosecond);
 
-void BM_BroadPhasePile(benchmark::State& state) {
-  const std::vector<Aabb> boxes = pile(static_cast<int>(state.range(0)));
-  BroadPhase grid;  // buffers kept between steps, as in a simulation
-  std::size_t pairs = 0;
-  for (auto _ : state) {
-    pairs = grid.find_pairs(boxes).size();
-    benchmark::DoNotOptimize(pairs);
-  }
-  state.counters["pairs"] = static_cast<double>(pairs);
-}
+void BM_BroadPhasePile(benchmark::State& state) { run_broad_phase(state, pile(static_cast<int>(state.range(0)))); }
 BENCHMARK(BM_BroadPhasePile)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
 
 void BM_RigidIntegrate(benchmark::State& state) {
