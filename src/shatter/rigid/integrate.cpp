@@ -20,7 +20,9 @@ Quat cayley_step(const Vec3& w, double dt) {
 // w = I_b^-1 (L_b + Q(w) L_b) / 2. Returns false when it does not converge (a step too large for
 // the spin; the caller splits it).
 bool midpoint_velocity(const Mat3& inverse_inertia, const Vec3& l_body, double dt, Vec3& w) {
-  w = inverse_inertia * l_body;
+  // First guess: the midpoint momentum after half an explicit step, L + dt/2 (L x w).
+  const Vec3 w0 = inverse_inertia * l_body;
+  w = inverse_inertia * (l_body + (0.5 * dt) * l_body.cross(w0));
   for (int it = 0; it < 200; ++it) {
     const Vec3 next = inverse_inertia * (0.5 * (l_body + cayley_step(w, dt) * l_body));
     const double change = (next - w).norm();
