@@ -66,11 +66,11 @@ BodyState make_body_state(const BodyModel& model, const RigidState& rigid = {});
 /// World positions of the body's nodes at its pose (m, #nodes).
 std::vector<Vec3> world_positions(const BodyModel& model, const RigidState& rigid);
 
-/// Follow a plastic event (apply_plasticity on this body) in place: the rest positions of the moved
-/// nodes, the FEM rest data of their tets (update_rest_shape), the boundary surface and the
-/// plastic strain change; tets, node masses and the mass are kept (mass is conserved). The centre
-/// of mass and inertia are recomputed for the new shape at the kept mass, and the body frame is
-/// re-centred on the new centre of mass (rigid.position moves with it so no node jumps).
+/// Follow a plastic event (apply_plasticity on this body) in place: the new rest positions, the
+/// boundary surface and the plastic strain; tets, node masses and the mass are kept (mass is
+/// conserved). The centre of mass and inertia follow the new shape at the kept mass, and the body
+/// frame is re-centred on the new centre of mass (rigid.position moves with it so no node jumps),
+/// so every tet's FEM rest data is recomputed.
 void apply_plastic_update(BodyModel& model, BodyState& state, const PlasticResult& plastic);
 
 }  // namespace shatter

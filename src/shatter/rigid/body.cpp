@@ -55,20 +55,22 @@ void apply_plastic_update(BodyModel& model, BodyState& state, const PlasticResul
   SHATTER_CHECK(plastic.plastic_strain.size() == model.mesh.tets.size());
   state.plastic_strain = plastic.plastic_strain;
   if (plastic.moved_nodes.empty()) return;
-  // The new shape at the kept mass: density scaled by the volume change.
+  // The new shape at the kept mass: its density follows the volume change (mass properties are
+  // linear in the density).
   const double mass = model.mass.mass;
   model.mesh.positions = plastic.rest_positions;
-  const double volume = total_volume(model.mesh);
-  const MassProperties shifted = mass_properties(model.mesh, mass / volume);
-  // Re-centre the body frame on the new centre of mass; the world pose moves with it.
-  const Vec3 dc = shifted.center;
+  MassProperties m = mass_properties(model.mesh, 1.0);
+  m.inertia *= mass / m.volume;
+  m.mass = mass;
+  // Re-centre the body frame on the new centre of mass; the world pose moves with it. Every node
+  // moves, so every tet's rest data is recomputed (as make_fem_model would).
+  const Vec3 dc = m.center;
   for (Vec3& p : model.mesh.positions) p -= dc;
   state.rigid.position += state.rigid.orientation * dc;
-  std::vector<Index> all(model.mesh.positions.size());
-  for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<Index>(i);
-  update_rest_shape(model.fem, model.mesh.positions, all);
+  m.center = Vec3::Zero();
+  model.mass = m;
+  for (Index e = 0; e < model.mesh.num_tets(); ++e) set_tet_rest(model.fem, e, model.mesh.corners(e));
   model.surface = boundary_surface(model.mesh, model.faces);
-  model.mass = mass_properties(model.mesh, mass / volume);
 }
 
 }  // namespace shatter

@@ -33,7 +33,9 @@ bool midpoint_velocity(const Mat3& inverse_inertia, const Vec3& l_body, double d
 }
 
 // The torque-free rotation over dt: orientation and body angular momentum, by halves when the
-// fixed point does not converge at full length (up to 2^10 pieces).
+// fixed point does not converge at full length. At 2^10 pieces the last iterate is used: the step
+// is still an exact rotation (world angular momentum kept), only the energy is then kept to the
+// iterate's accuracy rather than to 4 ulp.
 void rotate(const Mat3& inverse_inertia, Quat& q, Vec3& l_body, double dt, int depth) {
   Vec3 w;
   if (!midpoint_velocity(inverse_inertia, l_body, dt, w) && depth < 10) {
