@@ -25,7 +25,7 @@ struct StaticAnalysisOptions {
 };
 
 /// Everything a static analysis computed. When the solver did not converge, `report` says why
-/// (report.converged false) and `stress`, `results`, `fracture` are empty: nothing should be written.
+/// (report.converged false) and `results` and `fracture` are empty: nothing should be written.
 struct StaticAnalysis {
   ResolvedStaticCase resolved;             ///< anchors and loads per node
   FemModel model;                          ///< of the input mesh
@@ -33,7 +33,6 @@ struct StaticAnalysis {
   StaticSolverOptions solver_options;      ///< solver settings, from the case
   StaticReport report;                     ///< how the solve ended
   std::vector<Vec3> deformed;              ///< equilibrium positions, m (#nodes)
-  std::vector<TetStress> stress;           ///< per tet at `deformed` (#tets)
   StaticResults results;                   ///< displacements and stresses
   std::optional<FractureResult> fracture;  ///< with options.fracture
   Vec3 gravity_load = Vec3::Zero();        ///< total gravity load, N (zero without gravity)

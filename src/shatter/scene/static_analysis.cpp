@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <system_error>
+#include <utility>
 
 #include "shatter/mesh/io/mesh_io.h"
 #include "shatter/scene/static_fracture.h"
@@ -50,11 +51,11 @@ Result<StaticAnalysis> run_static_analysis(const StaticCase& c, const TetMesh& m
   if (!a.report.converged) return a;
 
   // Results, then fracture and plasticity of the solution from the same stresses.
-  a.stress = compute_stresses(a.model, a.deformed);
-  a.results = compute_static_results(a.model, mesh, a.deformed, a.stress);
+  std::vector<TetStress> stress = compute_stresses(a.model, a.deformed);
+  a.results = compute_static_results(a.model, mesh, a.deformed, stress);
   if (options.fracture) {
     const auto t_frac = Clock::now();
-    a.fracture = fracture_with_stress(mesh, a.model, a.deformed, a.stress, c.fracture);
+    a.fracture = fracture_with_stress(mesh, a.model, a.deformed, std::move(stress), c.fracture);
     a.fracture_ms = ms_since(t_frac);
   }
   return a;
