@@ -49,12 +49,12 @@ int run_static(const StaticArgs& args) {
   // Solve (and crack).
   auto analysis = run_static_analysis(*scase, mesh, {.fracture = args.fracture});
   if (!analysis) return report_error(analysis.error().to_string(), kExitBadInput);
-  const StaticReport* report = &analysis->report;
-  if (!report->converged)
+  const StaticReport& report = analysis->report;
+  if (!report.converged)
     return report_error(
         fmt::format("the static solver did not converge: {} (Newton iterations {}, relative "
                     "residual {:.3g}, load fraction {:.3g}); no output written",
-                    report->message, report->newton_iterations, report->relative_residual, report->load_fraction),
+                    report.message, report.newton_iterations, report.relative_residual, report.load_fraction),
         kExitFailure);
 
   // Files.
@@ -69,12 +69,11 @@ int run_static(const StaticArgs& args) {
 
   const double setup_ms = analysis->setup_ms;
   const double fracture_ms = analysis->fracture_ms;
-  const ResolvedStaticCase* resolved = &analysis->resolved;
+  const ResolvedStaticCase& resolved = analysis->resolved;
   const StaticProblem& problem = analysis->problem;
   const StaticSolverOptions& options = analysis->solver_options;
   const StaticResults& results = analysis->results;
-  static const FractureResult kNoFracture;
-  const FractureResult& frac = analysis->fracture ? *analysis->fracture : kNoFracture;
+  const FractureResult* frac = analysis->fracture ? &*analysis->fracture : nullptr;  // with --fracture
   const bool plastic = std::isfinite(scase->material.yield_stress);
   const Material& mat = scase->material;
   const Index maxu = results.max_displacement_node;
@@ -97,15 +96,15 @@ int run_static(const StaticArgs& args) {
         {"tensile_strength", std::isfinite(mat.tensile_strength) ? nlohmann::ordered_json(mat.tensile_strength)
                                                                  : nlohmann::ordered_json(nullptr)}};
     j["model"] = to_string(scase->model);
-    j["held_nodes"] = resolved->num_held_nodes;
-    j["total_load"] = {resolved->total_load.x(), resolved->total_load.y(), resolved->total_load.z()};
+    j["held_nodes"] = resolved.num_held_nodes;
+    j["total_load"] = {resolved.total_load.x(), resolved.total_load.y(), resolved.total_load.z()};
     j["gravity_load"] = {gravity_load.x(), gravity_load.y(), gravity_load.z()};
-    j["solver"] = {{"converged", report->converged},
-                   {"newton_iterations", report->newton_iterations},
-                   {"load_steps", report->load_steps},
-                   {"relative_residual", report->relative_residual},
+    j["solver"] = {{"converged", report.converged},
+                   {"newton_iterations", report.newton_iterations},
+                   {"load_steps", report.load_steps},
+                   {"relative_residual", report.relative_residual},
                    {"linear_solver", to_string(options.linear.kind)},
-                   {"linear_iterations", report->linear_iterations_total}};
+                   {"linear_iterations", report.linear_iterations_total}};
     const Vec3& u = results.displacement[maxu];
     j["max_displacement"] = {
         {"value", results.max_displacement}, {"node_id", mesh.node_id(maxu)}, {"vector", {u.x(), u.y(), u.z()}}};
@@ -117,18 +116,18 @@ int run_static(const StaticArgs& args) {
     j["would_crack"] = results.max_principal_stress > mat.tensile_strength;
     j["time_ms"] = {{"read", read_ms},
                     {"setup", setup_ms},
-                    {"solve", report->total_ms},
-                    {"assembly", report->assembly_ms},
-                    {"linear_solve", report->linear_solve_ms},
-                    {"forces", report->force_ms},
+                    {"solve", report.total_ms},
+                    {"assembly", report.assembly_ms},
+                    {"linear_solve", report.linear_solve_ms},
+                    {"forces", report.force_ms},
                     {"fracture", fracture_ms},
                     {"write", write_ms}};
-    if (args.fracture) {
+    if (frac) {
       nlohmann::ordered_json jf;
-      jf["broken"] = frac.fragments.size() > 1;
+      jf["broken"] = frac->fragments.size() > 1;
       nlohmann::ordered_json frags = nlohmann::ordered_json::array();
-      for (std::size_t k = 0; k < frac.fragments.size(); ++k) {
-        const Fragment& f = frac.fragments[k];
+      for (std::size_t k = 0; k < frac->fragments.size(); ++k) {
+        const Fragment& f = frac->fragments[k];
         frags.push_back({{"index", k},
                          {"tets", f.mesh.num_tets()},
                          {"nodes", f.mesh.num_nodes()},
@@ -139,7 +138,7 @@ int run_static(const StaticArgs& args) {
       }
       jf["fragments"] = std::move(frags);
       nlohmann::ordered_json cracks = nlohmann::ordered_json::array();
-      for (const CrackEvent& ev : frac.events) {
+      for (const CrackEvent& ev : frac->events) {
         const CrackPlan& p = ev.plan;
         cracks.push_back({{"origin_element_id", mesh.tet_id(p.origin_tet)},
                           {"point", {p.origin.x(), p.origin.y(), p.origin.z()}},
@@ -155,8 +154,8 @@ int run_static(const StaticArgs& args) {
       jf["cracks"] = std::move(cracks);
       if (plastic)
         jf["plasticity"] = {{"yield_stress", mat.yield_stress},
-                            {"yielded_tets", frac.plastic.yielded.size()},
-                            {"max_plastic_strain", max_plastic_strain(frac)},
+                            {"yielded_tets", frac->plastic.yielded.size()},
+                            {"max_plastic_strain", max_plastic_strain(*frac)},
                             {"rest_shape", rest_path}};
       j["fracture"] = std::move(jf);
     }
@@ -173,12 +172,12 @@ int run_static(const StaticArgs& args) {
       fmt::format("material    {}: E = {:.4g} Pa, nu = {:.4g}, density = {:.4g} kg/m^3, tensile strength = {:.4g} Pa\n",
                   mat.name, mat.youngs_modulus, mat.poisson_ratio, mat.density, mat.tensile_strength);
   s += fmt::format("model       {}\n", to_string(scase->model));
-  s += fmt::format("anchors     {} nodes held\n", resolved->num_held_nodes);
-  s += fmt::format("loads       {} N nodal", vec_text(resolved->total_load));
+  s += fmt::format("anchors     {} nodes held\n", resolved.num_held_nodes);
+  s += fmt::format("loads       {} N nodal", vec_text(resolved.total_load));
   if (problem.gravity) s += fmt::format(", {} N gravity", vec_text(gravity_load));
   s += "\n";
   s += fmt::format("solver      converged: {} Newton iteration(s), {} load step(s), relative residual {:.3g} ({})\n",
-                   report->newton_iterations, report->load_steps, report->relative_residual,
+                   report.newton_iterations, report.load_steps, report.relative_residual,
                    to_string(options.linear.kind));
   s += fmt::format("max |u|     {:.6g} m at node {} (u = {} m)\n", results.max_displacement, mesh.node_id(maxu),
                    vec_text(results.displacement[maxu]));
@@ -188,13 +187,13 @@ int run_static(const StaticArgs& args) {
     s += fmt::format("            {:.3g} x the tensile strength: {}\n", strength_ratio,
                      strength_ratio > 1 ? "it would crack there" : "no crack");
   s += fmt::format("max vM      {:.6g} Pa in element {}\n", results.max_von_mises, mesh.tet_id(maxvm));
-  if (args.fracture) {
-    if (frac.events.empty())
+  if (frac) {
+    if (frac->events.empty())
       s += "fracture    nothing breaks: no crack, 1 fragment\n";
     else
-      s += fmt::format("fracture    {} crack(s), {} fragment(s)\n", frac.events.size(), frac.fragments.size());
-    for (std::size_t k = 0; k < frac.events.size(); ++k) {
-      const CrackEvent& ev = frac.events[k];
+      s += fmt::format("fracture    {} crack(s), {} fragment(s)\n", frac->events.size(), frac->fragments.size());
+    for (std::size_t k = 0; k < frac->events.size(); ++k) {
+      const CrackEvent& ev = frac->events[k];
       const CrackPlan& p = ev.plan;
       s += fmt::format(
           "  crack {}   {}from element {} at {} m, normal {}, radius {:.4g} m, sigma1 {:.4g} Pa: "
@@ -202,20 +201,20 @@ int run_static(const StaticArgs& args) {
           k, p.ductile ? "(ductile) " : "", mesh.tet_id(p.origin_tet), vec_text(p.origin), vec_text(p.normal), p.radius,
           p.stress, ev.tets_marked, ev.tets_split, ev.nodes_duplicated);
     }
-    for (std::size_t k = 0; k < frac.fragments.size(); ++k) {
-      const Fragment& f = frac.fragments[k];
+    for (std::size_t k = 0; k < frac->fragments.size(); ++k) {
+      const Fragment& f = frac->fragments[k];
       s += fmt::format("  fragment {} {} tets, volume {:.6g} m^3, mass {:.6g} kg, centre of mass {} m\n", k,
                        f.mesh.num_tets(), f.mass.volume, f.mass.mass, vec_text(f.mass.center));
     }
     if (plastic) {
-      if (frac.plastic.yielded.empty())
+      if (frac->plastic.yielded.empty())
         s += fmt::format("plasticity  no tet over the yield stress ({:.4g} Pa): the rest shape is unchanged\n",
                          mat.yield_stress);
       else
         s += fmt::format(
             "plasticity  {} tet(s) yielded (von Mises over {:.4g} Pa), max plastic strain {:.4g}; "
             "new rest shape in {}\n",
-            frac.plastic.yielded.size(), mat.yield_stress, max_plastic_strain(frac), rest_path);
+            frac->plastic.yielded.size(), mat.yield_stress, max_plastic_strain(*frac), rest_path);
     }
   } else if (scase->fracture_given) {
     s += "fracture    the case's \"fracture\" section is used with --fracture\n";
@@ -223,7 +222,7 @@ int run_static(const StaticArgs& args) {
   s += fmt::format(
       "time        read {:.1f} ms, setup {:.1f} ms, solve {:.1f} ms (assembly {:.1f}, linear {:.1f}, "
       "forces {:.1f}), {}write {:.1f} ms\n",
-      read_ms, setup_ms, report->total_ms, report->assembly_ms, report->linear_solve_ms, report->force_ms,
+      read_ms, setup_ms, report.total_ms, report.assembly_ms, report.linear_solve_ms, report.force_ms,
       args.fracture ? fmt::format("fracture {:.1f} ms, ", fracture_ms) : "", write_ms);
   s += "output      ";
   for (std::size_t k = 0; k < outputs.size(); ++k) s += (k ? ", " : "") + outputs[k];
