@@ -1,0 +1,39 @@
+// Collision shapes for non-convex bodies: a compound of convex pieces, each the hull of a cluster of
+// the body's own face-connected tets (docs/method.md §2.8). The clusters grow while the hull
+// over-fills the tets it covers by no more than a set fraction, so a convex body is one piece and a
+// curved shard a handful. Being built from the tets, the pieces follow the body through every crack
+// and plastic dent at run time.
+#pragma once
+
+#include <vector>
+
+#include "shatter/collide/convex_hull.h"
+#include "shatter/core/error.h"
+#include "shatter/mesh/tet_mesh.h"
+#include "shatter/mesh/topology.h"
+
+namespace shatter {
+
+/// One convex piece of a body.
+struct ConvexPiece {
+  ConvexHull hull;         ///< in the mesh's frame (the body frame)
+  std::vector<Index> tets; ///< the tets it covers, sorted
+  double tet_volume = 0;   ///< their total volume, m^3
+};
+
+/// Settings of the decomposition.
+struct DecompositionOptions {
+  /// Largest allowed (hull volume - tet volume) / tet volume of a piece.
+  double max_overfill = 0.15;
+  /// Upper bound on pieces; when the over-fill rule would make more, clusters are merged (largest
+  /// over-fill growth last) until this many remain. 0: no bound.
+  Index max_pieces = 64;
+};
+
+/// Convex pieces covering every tet of `mesh` once. Deterministic: the same mesh gives the same
+/// pieces in the same order.
+/// Errors: a mesh with no tets; a piece whose points span no volume (degenerate tets).
+Result<std::vector<ConvexPiece>> decompose_convex(const TetMesh& mesh, const TetFaces& faces,
+                                                  const DecompositionOptions& options = {});
+
+}  // namespace shatter
