@@ -36,7 +36,17 @@ struct ManifoldPoint {
   Vec3 point = Vec3::Zero();  ///< world, m: midway between the two surfaces
   double separation = 0;      ///< along the manifold normal, m: < 0 overlapping, > 0 a gap
   /// Names the pair of features that made the point (stable while the contact persists), so the
-  /// solver can carry impulses from one step to the next (warm start).
+  /// solver can carry impulses from one step to the next (warm start). Bits 31-30 the kind:
+  /// - 0, 1 (face contact, reference face on A, on B): bits 29-22 the reference face, 21-14 the
+  ///   incident face (indices mod 256), 13-7 and 6-0 the two lines the point lies on, smaller code
+  ///   first. A line code is an incident-face edge (0..63: its place in the face loop from
+  ///   HullFace::edge, mod 64) or 64 + a reference-face side (same numbering). An incident vertex
+  ///   lies on its two incident edges, a clipped point on an incident edge and a side, a corner of
+  ///   the reference face on two sides; (127, 127) marks the single deepest-vertex point used when
+  ///   clipping leaves nothing.
+  /// - 2 (edge contact): bits 29-15 A's edge, 14-0 B's edge (half-edge / 2, mod 2^15).
+  /// - 3 (hull and plane): bits 29-0 the hull vertex.
+  /// Unique within a manifold while faces have at most 64 edges.
   std::uint32_t feature = 0;
 };
 
@@ -58,8 +68,25 @@ struct SatCache {
 
 /// Contact between two hulls placed at `ta`, `tb`. Points with separation > `speculative_distance`
 /// are left out; an empty manifold (count 0) means farther apart than that. `cache` may be null.
+///
+/// Axis choice, with r = the smaller hull radius: a face of B replaces the face of A as reference
+/// only when s_B > s_A + 0.02 |s_A| + 0.002 r, and the edge pair replaces the faces only when
+/// s_edge > s_face + 0.1 |s_face| + 0.002 r (s: separation along the axis, s_face the larger of
+/// the two), so resting boxes always get a face manifold and the choice does not flicker. Incident
+/// vertices up to 0.001 r outside a side plane of the reference face are kept as they are (equal
+/// stacked boxes keep their 4 corners and ids under round-off). When clipping leaves no point
+/// (deep, sideways overlaps) the edge pair gives one point, else the deepest incident vertex. The
+/// cache is only tested first: if its axis still separates beyond the speculative distance the
+/// result is empty at once; otherwise the full test runs, so results never depend on it.
 ContactManifold collide_hulls(const ConvexHull& a, const Transform& ta, const ConvexHull& b, const Transform& tb,
                               double speculative_distance, SatCache* cache = nullptr);
+
+/// The separating-axis test of collide_hulls on its own: the largest separation of the two hulls
+/// along the face normals of both and the edge-pair axes that pass the Gauss-map test, m. < 0: the
+/// hulls overlap and this is minus the penetration depth; >= 0: they are at least this far apart.
+/// `axis` (may be null) receives the feature of that axis, in SatCache's form.
+double hull_separation(const ConvexHull& a, const Transform& ta, const ConvexHull& b, const Transform& tb,
+                       SatCache* axis = nullptr);
 
 /// Contact between a hull (A) and a plane (B): the hull's vertices within `speculative_distance`
 /// of the plane, reduced to at most 4 (the deepest and the three that span the largest area). The
