@@ -85,6 +85,7 @@ ConvexHull make_hull(const std::vector<Vec3>& vertices, std::vector<std::vector<
     h.radius = std::max(h.radius, (v - h.centroid).norm());
     h.bounds.extend(v);
   }
+  EXPECT_EQ(check_convex_hull(h, 1e-9), "");
   return h;
 }
 
@@ -149,6 +150,35 @@ ConvexHull random_hull(Random& rng, int kind) {
       for (int i = 0; i < 4; ++i) p.push_back(rng.unit_vec3() * rng.uniform(0.5, 1.0));
       if (std::abs((p[1] - p[0]).dot((p[2] - p[0]).cross(p[3] - p[0]))) < 0.05) return make_box(Vec3(0.3, 0.4, 0.5));
       return make_hull(p, {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2, 3}});
+    }
+    case 4: {  // the hull builder on 8..40 points in a rotated box (some inside)
+      const int n = 8 + static_cast<int>(rng.below(33));
+      const Vec3 half = rng.uniform_vec3(0.2, 1.0);
+      const Mat3 r = random_rotation(rng);
+      std::vector<Vec3> p;
+      for (int i = 0; i < n; ++i) p.push_back(r * rng.uniform_vec3(-1, 1).cwiseProduct(half));
+      auto hull = build_convex_hull(p);
+      EXPECT_TRUE(hull.ok());
+      return hull.ok() ? hull.value() : make_box(half);
+    }
+    case 5: {  // the hull builder on a box's corners and points on its faces: merged polygon faces
+      const Vec3 half = rng.uniform_vec3(0.2, 1.0);
+      const Mat3 r = random_rotation(rng);
+      std::vector<Vec3> p;
+      for (int i = 0; i < 8; ++i)
+        p.push_back(
+            r * Vec3((i & 1) ? half.x() : -half.x(), (i & 2) ? half.y() : -half.y(), (i & 4) ? half.z() : -half.z()));
+      for (int i = 0; i < 12; ++i) {
+        Vec3 q = rng.uniform_vec3(-1, 1);
+        const auto axis = static_cast<Eigen::Index>(rng.below(3));
+        q[axis] = q[axis] < 0 ? -1 : 1;
+        p.push_back(r * q.cwiseProduct(half));
+      }
+      auto hull = build_convex_hull(p);
+      EXPECT_TRUE(hull.ok());
+      if (!hull.ok()) return make_box(half);
+      EXPECT_EQ(hull.value().faces.size(), 6u);
+      return hull.value();
     }
     default: {  // 8..32 points on an ellipsoid
       const int n = 8 + static_cast<int>(rng.below(25));
@@ -351,8 +381,8 @@ TEST(Contact, RandomPairsMatchBruteForceSeparatingAxes) {
   int overlapping = 0, separated = 0, edge_manifolds = 0, face_b_manifolds = 0, empty_overlaps = 0;
   double worst = 0;
   for (int trial = 0; trial < 600; ++trial) {
-    const ConvexHull a = random_hull(rng, static_cast<int>(rng.below(4)));
-    const ConvexHull b = random_hull(rng, static_cast<int>(rng.below(4)));
+    const ConvexHull a = random_hull(rng, static_cast<int>(rng.below(6)));
+    const ConvexHull b = random_hull(rng, static_cast<int>(rng.below(6)));
     const Transform ta = at(rng.uniform_vec3(-2, 2), random_rotation(rng));
     // B's centroid at a random distance up to the sum of the radii from A's.
     const Vec3 ca = ta.apply(a.centroid);
@@ -489,7 +519,7 @@ TEST(Contact, BoxOnPlane) {
   // with the deepest.
   Random rng(5);
   for (int trial = 0; trial < 300; ++trial) {
-    const ConvexHull h = random_hull(rng, static_cast<int>(rng.below(4)));
+    const ConvexHull h = random_hull(rng, static_cast<int>(rng.below(6)));
     const Transform t = at(rng.uniform_vec3(-1, 1), random_rotation(rng));
     const Plane plane{rng.unit_vec3(), rng.uniform(-0.5, 0.5)};
     const double spec = rng.uniform(0.0, 0.3);
@@ -648,7 +678,7 @@ TEST(Contact, Timing) {
   Random rng(8);
   std::vector<Vec3> p;
   for (int i = 0; i < 32; ++i) p.push_back(rng.unit_vec3());
-  const ConvexHull round = make_triangle_hull(p);
+  const ConvexHull round = build_convex_hull(p).value();
   const Transform tr = at(Vec3(0, 1.9, 0), random_rotation(rng));
   const double round_ns =
       time_ns([&] { sink += collide_hulls(round, at(Vec3::Zero()), round, tr, 0.01).count; }, 20000);

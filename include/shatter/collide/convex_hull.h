@@ -36,6 +36,7 @@ struct ConvexHull {
   double volume = 0;                ///< m^3
   double radius = 0;                ///< largest distance from the centroid to a vertex, m
   Aabb bounds;                      ///< box around the vertices, m
+  double tolerance = 0;             ///< the tolerance it was built with, m (HullOptions::tolerance resolved)
 
   /// Twin of half-edge e.
   [[nodiscard]] static Index twin(Index e) { return e ^ 1; }
@@ -45,20 +46,25 @@ struct ConvexHull {
 
 /// Settings of the hull builder.
 struct HullOptions {
-  /// Points within this distance of a face plane count as on it, and faces whose planes agree to
-  /// it are merged. 0: from the point set, 1e-9 of its extent plus a few round-off units.
+  /// Points within this distance of a face plane count as on it (half of it above a triangle
+  /// while building), and adjacent faces whose vertices fit in a slab this wide are merged. 0: from the point set, 1e-9 of its extent plus a few round-off units.
   double tolerance = 0;
 };
 
 /// Hull of a point set (quickhull). Interior and duplicate points are dropped; nearly coplanar
-/// triangles are merged into convex polygons.
+/// triangles are merged into convex polygons. Vertices are input points, in input order; every
+/// input point lies on or behind every face plane within the tolerance (up to about 1.2x the
+/// tolerance where noise of the tolerance's own size made faces merge). Visibility is decided
+/// with exact predicates, so the structure is valid for any input.
 /// Errors: fewer than 4 points, non-finite points, or points that span no volume (all on a plane
 /// or line, within the tolerance).
 Result<ConvexHull> build_convex_hull(std::span<const Vec3> points, const HullOptions& options = {});
 
 /// Checks a hull's structure and convexity (for tests and debug builds): twins and face loops
 /// consistent, Euler V - E + F = 2, every vertex on or behind every face plane within
-/// `tolerance`, adjacent faces not coplanar. Returns an empty string when valid, else what failed.
+/// `tolerance`, adjacent faces not coplanar (coplanar: the vertices of both fit in a slab of width
+/// `tolerance` across either face's normal; the builder merges such faces). Returns an empty
+/// string when valid, else what failed.
 std::string check_convex_hull(const ConvexHull& hull, double tolerance);
 
 }  // namespace shatter

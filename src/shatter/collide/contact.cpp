@@ -83,12 +83,12 @@ struct EdgeData {
 
 // Buffers kept between calls (per thread), so that steady-state queries do not allocate.
 struct Scratch {
-  std::vector<Vec3> b_in_a;                 // B's vertices in A's frame
-  std::vector<Vec3> a_in_b;                 // A's vertices in B's frame
-  std::vector<Vec3> b_normals;              // B's face normals in A's frame
-  std::vector<EdgeData> edges;              // A's edges
-  std::vector<EdgeData> b_edges;            // B's edges in A's frame
-  std::vector<std::int8_t> sign_a, sign_b;  // see query_edges
+  std::vector<Vec3> b_in_a;         // B's vertices in A's frame
+  std::vector<Vec3> a_in_b;         // A's vertices in B's frame
+  std::vector<Vec3> b_normals;      // B's face normals in A's frame
+  std::vector<EdgeData> edges;      // A's edges
+  std::vector<EdgeData> b_edges;    // B's edges in A's frame
+  std::vector<int> sign_a, sign_b;  // see query_edges
   std::vector<ClipVertex> poly, clipped;
   std::vector<ManifoldPoint> candidates;
 };
@@ -122,7 +122,7 @@ FaceQuery query_faces(const ConvexHull& ref, const std::vector<Vec3>& other, dou
   return q;
 }
 
-std::int8_t sign(double x) { return static_cast<std::int8_t>((x > 0) - (x < 0)); }
+int sign(double x) { return static_cast<int>(x > 0) - static_cast<int>(x < 0); }
 
 // Edge pairs of A and B whose Gauss-map arcs cross (Gregorius 2013: then the two edges make a face
 // of the Minkowski difference A - B); the separation along the cross product of their directions,
@@ -165,9 +165,9 @@ EdgeQuery query_edges(const ConvexHull& a, const ConvexHull& b, const std::vecto
 
   EdgeQuery q;
   for (std::size_t j = 0; j < nb; ++j) {
-    const std::int8_t* c_row = &s.sign_b[static_cast<std::size_t>(s.b_edges[j].u) * na];
-    const std::int8_t* d_row = &s.sign_b[static_cast<std::size_t>(s.b_edges[j].v) * na];
-    const std::int8_t* j_row = &s.sign_a[j * fa];
+    const int* c_row = &s.sign_b[static_cast<std::size_t>(s.b_edges[j].u) * na];
+    const int* d_row = &s.sign_b[static_cast<std::size_t>(s.b_edges[j].v) * na];
+    const int* j_row = &s.sign_a[j * fa];
     const EdgeData& eb = s.b_edges[j];
     for (std::size_t k = 0; k < na; ++k) {
       // c.(v x u), d.(v x u) have the signs of B's normals along A's edge (c, d and v x u are
@@ -405,20 +405,6 @@ void edge_contact(const ConvexHull& a, const Transform& ta, const ConvexHull& b,
 double tolerance_scale(const ConvexHull& a, const ConvexHull& b) { return std::min(a.radius, b.radius); }
 
 }  // namespace
-
-// Support mapping by a linear scan; ties go to the lowest index (strict comparison).
-Index ConvexHull::support(const Vec3& d) const {
-  Index best = 0;
-  double best_dot = -kInf;
-  for (Index i = 0; i < static_cast<Index>(vertices.size()); ++i) {
-    const double x = vertices[static_cast<std::size_t>(i)].dot(d);
-    if (x > best_dot) {
-      best_dot = x;
-      best = i;
-    }
-  }
-  return best;
-}
 
 double hull_separation(const ConvexHull& a, const Transform& ta, const ConvexHull& b, const Transform& tb,
                        SatCache* axis) {
