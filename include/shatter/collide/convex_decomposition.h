@@ -16,22 +16,25 @@ namespace shatter {
 
 /// One convex piece of a body.
 struct ConvexPiece {
-  ConvexHull hull;         ///< in the mesh's frame (the body frame)
-  std::vector<Index> tets; ///< the tets it covers, sorted
-  double tet_volume = 0;   ///< their total volume, m^3
+  ConvexHull hull;          ///< in the mesh's frame (the body frame)
+  std::vector<Index> tets;  ///< the tets it covers, sorted
+  double tet_volume = 0;    ///< their total volume, m^3
 };
 
 /// Settings of the decomposition.
 struct DecompositionOptions {
   /// Largest allowed (hull volume - tet volume) / tet volume of a piece.
   double max_overfill = 0.15;
-  /// Upper bound on pieces; when the over-fill rule would make more, clusters are merged (largest
-  /// over-fill growth last) until this many remain. 0: no bound.
+  /// Upper bound on pieces; when the over-fill rule would make more, clusters are merged (least
+  /// merged over-fill first) until this many remain. 0: no bound.
   Index max_pieces = 64;
 };
 
-/// Convex pieces covering every tet of `mesh` once. Deterministic: the same mesh gives the same
-/// pieces in the same order.
+/// Convex pieces covering every tet of `mesh` once (pieces in order of their lowest tet), each
+/// hull holding its tets' nodes. Deterministic: the same mesh gives the same pieces in the same
+/// order. max_overfill steers the growth, which counts the unassigned tets a hull already encloses
+/// as material the piece will take; when neighbours take some of it, or leftovers are merged in, a
+/// piece can end above max_overfill (within 2x in the tests).
 /// Errors: a mesh with no tets; a piece whose points span no volume (degenerate tets).
 Result<std::vector<ConvexPiece>> decompose_convex(const TetMesh& mesh, const TetFaces& faces,
                                                   const DecompositionOptions& options = {});
