@@ -19,6 +19,8 @@ packages=(
   libcli11-dev nlohmann-json3-dev libfmt-dev libspdlog-dev
   # tests and benchmarks; independent references the tests compare against
   libgtest-dev libgmock-dev libbenchmark-dev python3 python3-meshio calculix-ccx
+  # benchmark peer for the rigid world (linked into bench/ only)
+  libbullet-dev
 )
 for arg in "$@"; do
   case "$arg" in

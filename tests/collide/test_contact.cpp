@@ -515,7 +515,8 @@ TEST(Contact, BoxOnPlane) {
     ASSERT_EQ(m.count, expected);
     for (int i = 0; i < m.count; ++i) EXPECT_NEAR(m.points[static_cast<std::size_t>(i)].separation, -0.002, 1e-14);
   }
-  // Random hulls and planes: exactly the vertices within the speculative distance, or 4 of them
+  // Random hulls and planes: the corners within the speculative distance of the incident face (of
+  // the faces around the deepest vertex, the most anti-parallel to the plane normal), or 4 of them
   // with the deepest.
   Random rng(5);
   for (int trial = 0; trial < 300; ++trial) {
@@ -523,11 +524,29 @@ TEST(Contact, BoxOnPlane) {
     const Transform t = at(rng.uniform_vec3(-1, 1), random_rotation(rng));
     const Plane plane{rng.unit_vec3(), rng.uniform(-0.5, 0.5)};
     const double spec = rng.uniform(0.0, 0.3);
-    std::vector<double> seps;
-    for (const Vec3& v : h.vertices) {
-      const double s = plane.normal.dot(t.apply(v)) - plane.offset;
-      if (s <= spec) seps.push_back(s);
+    const auto sep_of = [&](Index i) {
+      return plane.normal.dot(t.apply(h.vertices[static_cast<std::size_t>(i)])) - plane.offset;
+    };
+    Index deepest_vertex = 0;
+    for (Index i = 1; i < static_cast<Index>(h.vertices.size()); ++i)
+      if (sep_of(i) < sep_of(deepest_vertex)) deepest_vertex = i;
+    Index incident = -1;
+    double most = -1e300;
+    for (const HullHalfEdge& e : h.edges) {
+      const double d = -(t.rotation * h.faces[static_cast<std::size_t>(e.face)].normal).dot(plane.normal);
+      if (e.origin == deepest_vertex && d > most) {
+        most = d;
+        incident = e.face;
+      }
     }
+    ASSERT_GE(incident, 0);
+    std::vector<double> seps;
+    Index e = h.faces[static_cast<std::size_t>(incident)].edge;
+    do {
+      const double s = sep_of(h.edges[static_cast<std::size_t>(e)].origin);
+      if (s <= spec) seps.push_back(s);
+      e = h.edges[static_cast<std::size_t>(e)].next;
+    } while (e != h.faces[static_cast<std::size_t>(incident)].edge);
     const ContactManifold m = collide_hull_plane(h, t, plane, spec);
     ASSERT_EQ(m.count, std::min<int>(4, static_cast<int>(seps.size())));
     EXPECT_EQ(m.normal, -plane.normal);

@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <span>
 
 #include "shatter/collide/convex_hull.h"
@@ -88,16 +89,21 @@ ContactManifold collide_hulls(const ConvexHull& a, const Transform& ta, const Co
 double hull_separation(const ConvexHull& a, const Transform& ta, const ConvexHull& b, const Transform& tb,
                        SatCache* axis = nullptr);
 
-/// Contact between a hull (A) and a plane (B): the hull's vertices within `speculative_distance`
-/// of the plane, reduced to at most 4 (the deepest and the three that span the largest area). The
-/// normal is minus the plane normal (from the hull into the plane's solid).
+/// Contact between a hull (A) and a plane (B), as a face contact: the incident face is, of the
+/// faces around the hull's deepest vertex, the one most anti-parallel to the plane normal; its
+/// corners within `speculative_distance` of the plane are the points, reduced to at most 4 (the
+/// deepest and the three that span the largest area). The normal is minus the plane normal (from
+/// the hull into the plane's solid).
 ContactManifold collide_hull_plane(const ConvexHull& a, const Transform& ta, const Plane& plane,
                                    double speculative_distance);
 
 /// Reduce candidate points (all on one manifold normal) to at most 4: the deepest, then the point
 /// farthest from it, then the two that add the most area on each side (Box2D/Jolt style). Keeps
-/// the input when it has 4 or fewer. `normal` is the manifold normal.
+/// the input when it has 4 or fewer. `normal` is the manifold normal. With a finite `touch_band`
+/// (m), the choice is made among the points within that band of the deepest when at least three
+/// are (the collide functions pass 2 % of the smaller hull radius).
 int reduce_manifold_points(const Vec3& normal, std::span<const ManifoldPoint> candidates,
-                           std::array<ManifoldPoint, 4>& out);
+                           std::array<ManifoldPoint, 4>& out,
+                           double touch_band = std::numeric_limits<double>::infinity());
 
 }  // namespace shatter

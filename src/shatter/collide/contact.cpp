@@ -93,6 +93,10 @@ struct Scratch {
   std::vector<ManifoldPoint> candidates;
 };
 
+// Points deeper than the deepest by less than this fraction of the (smaller) hull radius touch;
+// the manifold is chosen among them first (reduce_manifold_points).
+constexpr double kTouchBand = 0.02;
+
 Scratch& scratch() {
   thread_local Scratch s;
   return s;
@@ -359,7 +363,7 @@ int face_contact(const ConvexHull& ref, Index ref_face, const ConvexHull& inc, c
     if (sep <= speculative_distance)
       s.candidates.push_back({v.p - 0.5 * sep * n, sep, face_feature(kind, ref_face, inc_face, v.line_a, v.line_b)});
   }
-  return reduce_manifold_points(n, s.candidates, out);
+  return reduce_manifold_points(n, s.candidates, out, kTouchBand * std::min(ref.radius, inc.radius));
 }
 
 // Closest points c1 on segment p1 + s d1 and c2 on p2 + t d2, s, t in [0, 1] (Ericson,
@@ -468,28 +472,67 @@ ContactManifold collide_hull_plane(const ConvexHull& a, const Transform& ta, con
   const double offset = plane.offset - plane.normal.dot(ta.translation);
   Scratch& s = scratch();
   s.candidates.clear();
-  for (Index i = 0; i < static_cast<Index>(a.vertices.size()); ++i) {
+  // As a face contact against the plane: the incident face is, of the faces around the deepest
+  // vertex, the one most anti-parallel to the plane normal, and its corners within the speculative
+  // distance are the points. Taking every vertex within reach instead gives a curved hull a support
+  // polygon that jumps between distant vertices as it rolls, and the body rocks and gains energy.
+  const Index deepest = a.support(-n);
+  Index incident = -1;
+  double most = -kInf;
+  for (std::size_t e = 0; e < a.edges.size(); ++e) {
+    if (a.edges[e].origin != deepest) continue;
+    const Index f = a.edges[e].face;
+    const double d = -a.faces[static_cast<std::size_t>(f)].normal.dot(n);
+    if (d > most) {
+      most = d;
+      incident = f;
+    }
+  }
+  const auto add_vertex = [&](Index i) {
     const Vec3& v = a.vertices[static_cast<std::size_t>(i)];
     const double sep = n.dot(v) - offset;
     if (sep <= speculative_distance)
       s.candidates.push_back(
           {v - 0.5 * sep * n, sep, kKindPlane << 30 | (static_cast<std::uint32_t>(i) & 0x3fffffffu)});
+  };
+  if (incident < 0) {
+    add_vertex(deepest);
+  } else {
+    const Index first = a.faces[static_cast<std::size_t>(incident)].edge;
+    Index e = first;
+    do {
+      add_vertex(a.edges[static_cast<std::size_t>(e)].origin);
+      e = a.edges[static_cast<std::size_t>(e)].next;
+    } while (e != first);
   }
   ContactManifold m;
   m.normal = -plane.normal;
   // Reduced in A's frame; the normal's sign does not matter to the reduction's choice.
-  m.count = reduce_manifold_points(-n, s.candidates, m.points);
+  m.count = reduce_manifold_points(-n, s.candidates, m.points, kTouchBand * a.radius);
   for (int i = 0; i < m.count; ++i)
     m.points[static_cast<std::size_t>(i)].point = ta.apply(m.points[static_cast<std::size_t>(i)].point);
   return m;
 }
 
 int reduce_manifold_points(const Vec3& normal, std::span<const ManifoldPoint> candidates,
-                           std::array<ManifoldPoint, 4>& out) {
+                           std::array<ManifoldPoint, 4>& out, double touch_band) {
   const std::size_t n = candidates.size();
   if (n <= 4) {
     std::copy(candidates.begin(), candidates.end(), out.begin());
     return static_cast<int>(n);
+  }
+  if (std::isfinite(touch_band)) {
+    // Keep to the points that touch (within the band of the deepest) when they span an area: a
+    // curved hull resting on a plane has many vertices within the speculative distance, and a
+    // support polygon chosen from those with a gap lets the body sink and rock on the side it
+    // leaves out.
+    double deepest = kInf;
+    for (const ManifoldPoint& c : candidates) deepest = std::min(deepest, c.separation);
+    thread_local std::vector<ManifoldPoint> touching;
+    touching.clear();
+    for (const ManifoldPoint& c : candidates)
+      if (c.separation <= deepest + touch_band) touching.push_back(c);
+    if (touching.size() >= 3 && touching.size() < n) return reduce_manifold_points(normal, touching, out);
   }
   // 1: the deepest (lowest separation; ties to the first).
   std::size_t i0 = 0;

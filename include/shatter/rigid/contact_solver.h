@@ -1,0 +1,126 @@
+// Contact response: a soft-step solver after Box2D v3 and Box3D (Catto, "Solver2D", 2024;
+// docs/method.md §2.8). Each step is split into substeps; per substep the bodies take gravity, the
+// contacts are warm-started with the impulses they carried, solved once with a soft position bias
+// (a spring of `contact_hertz` and damping ratio `damping_ratio`, push-out capped at
+// `max_push_velocity`), the positions are integrated, and the contacts are solved once more without
+// bias (relax). After the substeps one restitution pass restores the bounce of contacts that
+// approached faster than `restitution_threshold`. Contacts with a gap (speculative) remove only the
+// approach that would close the gap within a substep, so nothing passes through at any speed the
+// detection covers.
+//
+// Friction acts at the manifold's friction centre, not per point (as Box3D does): one 2D tangent
+// impulse with its coupled 2x2 effective mass, bounded by mu times the manifold's total normal
+// impulse, and one twist impulse about the normal bounded by mu times the sum of each point's normal
+// impulse times its lever arm. Per-point friction solved point after point pushes a box sideways
+// and turns it a little each pass; a tall stack then sways.
+//
+// The functions here work on flat arrays the world fills; the world owns the loop.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "shatter/core/types.h"
+
+namespace shatter {
+
+/// Soft constraint coefficients for one substep length (Box2D's b2Softness).
+struct Softness {
+  double bias_rate = 0;      ///< 1/s: bias velocity per metre of overlap
+  double mass_scale = 1;     ///< scales the effective mass
+  double impulse_scale = 0;  ///< fraction of the accumulated impulse relaxed away
+};
+
+/// Coefficients of a spring of `hertz` and `damping_ratio` integrated implicitly over `h` seconds.
+/// hertz == 0 gives a rigid constraint with no bias.
+Softness make_softness(double hertz, double damping_ratio, double h);
+
+/// The velocity state of one body during a step.
+struct SolverBody {
+  Vec3 linear_velocity = Vec3::Zero();   ///< m/s
+  Vec3 angular_velocity = Vec3::Zero();  ///< world, rad/s
+  double inverse_mass = 0;               ///< 1/kg (0: static or kinematic)
+  Mat3 inverse_inertia = Mat3::Zero();   ///< world, at the start of the step, 1/(kg m^2)
+  Vec3 position = Vec3::Zero();          ///< current centre of mass, m
+  Mat3 rotation = Mat3::Identity();      ///< current orientation
+};
+
+/// One point of a contact constraint.
+struct ContactPoint {
+  Vec3 position = Vec3::Zero();        ///< world point at the start of the step, m
+  Vec3 anchor_a = Vec3::Zero();        ///< world offset from A's centre of mass at the start, m
+  Vec3 anchor_b = Vec3::Zero();        ///< the same for B
+  Vec3 local_anchor_a = Vec3::Zero();  ///< the point in A's frame (world point for a static A)
+  Vec3 local_anchor_b = Vec3::Zero();  ///< the point in B's frame
+  double separation = 0;               ///< along the normal at the start of the step, m (< 0 overlap)
+  double normal_mass = 0;              ///< effective mass along the normal, kg
+  double normal_impulse = 0;           ///< accumulated (warm start), N s
+  double lever_arm = 0;                ///< distance to the friction centre, m (twist bound)
+  /// Fastest approach (minus the relative normal velocity, m/s, > 0 approaching) met at the start
+  /// of the step or before any biased pass of its substeps: the impact speed.
+  double approach_speed = 0;
+  double max_normal_impulse = 0;  ///< largest accumulated normal impulse in the step, N s
+  /// Everything applied along the normal during the step, over all substeps and passes (warm
+  /// starts included), N s.
+  double total_normal_impulse = 0;
+  std::uint32_t feature = 0;  ///< feature pair id (warm-start matching)
+};
+
+/// One manifold as the solver sees it: bodies, one normal from A to B, up to 4 points.
+struct ContactConstraint {
+  Index body_a = -1;  ///< solver body index (the static body slot for static shapes)
+  Index body_b = -1;
+  Vec3 normal = Vec3::UnitY();                                 ///< world, from A to B
+  std::array<Vec3, 2> tangents{Vec3::UnitX(), Vec3::UnitZ()};  ///< orthonormal with the normal
+  double friction = 0.6;                                       ///< Coulomb coefficient (static = dynamic)
+  double restitution = 0;                                      ///< coefficient of restitution
+  Softness softness;  ///< from the world's contact spring (stiffer with static bodies)
+  std::array<ContactPoint, 4> points{};
+  int count = 0;
+  // Friction at the friction centre (the points' mean, gaps weighted down).
+  Vec3 centre_a = Vec3::Zero();                                ///< world offset from A's centre of mass, m
+  Vec3 centre_b = Vec3::Zero();                                ///< the same for B
+  Eigen::Matrix2d tangent_mass = Eigen::Matrix2d::Zero();      ///< inverse of the 2x2 tangent K, kg
+  double twist_mass = 0;                                       ///< about the normal, kg m^2
+  Eigen::Vector2d friction_impulse = Eigen::Vector2d::Zero();  ///< accumulated, along the tangents, N s
+  double twist_impulse = 0;                                    ///< accumulated, about the normal, N m s
+  /// Friction applied on B during the step, over all substeps and passes, world, N s.
+  Vec3 total_friction_impulse = Vec3::Zero();
+};
+
+/// Settings of the solver.
+struct ContactSolverSettings {
+  double contact_hertz = 30;         ///< contact spring, Hz (capped at an eighth of the substep rate)
+  double damping_ratio = 10;         ///< contact spring damping ratio (over-damped: no bounce from the push-out)
+  double max_push_velocity = 3;      ///< largest push-out speed, m/s
+  double restitution_threshold = 1;  ///< approach speed below which contacts do not bounce, m/s
+};
+
+/// Fill the constraint's derived data once per step, from points whose position, anchors and
+/// separation the caller set: tangents, friction centre, effective masses, approach speeds. Keeps
+/// the warm-start impulses the caller put in and zeroes the step totals. `speculative_distance`
+/// (m) fades points with a gap out of the friction centre.
+void prepare_contact(ContactConstraint& c, std::span<const SolverBody> bodies, double speculative_distance);
+
+/// Apply the accumulated impulses (warm start), adding them to the step totals.
+void warm_start_contact(ContactConstraint& c, std::span<SolverBody> bodies);
+
+/// One pass over the constraint: normals, twist, then friction. `use_bias`: push out overlap
+/// softly (the substep's first pass); otherwise only speculative gaps are honoured (relax).
+void solve_contact(ContactConstraint& c, std::span<SolverBody> bodies, double inverse_h, bool use_bias,
+                   double max_push_velocity);
+
+/// After the substeps: restore the normal velocity -e v0 where the approach was faster than the
+/// threshold and the contact carried load.
+void apply_restitution(ContactConstraint& c, std::span<SolverBody> bodies, double threshold);
+
+/// Current separation of point p of `c` from the bodies' current poses, m.
+double current_separation(const ContactConstraint& c, const ContactPoint& p, std::span<const SolverBody> bodies);
+
+/// Two unit tangents completing unit n to a right-handed frame, continuous in n except at n.z = -1
+/// (Duff et al. 2017, "Building an orthonormal basis, revisited").
+std::array<Vec3, 2> tangent_basis(const Vec3& n);
+
+}  // namespace shatter

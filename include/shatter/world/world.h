@@ -1,0 +1,240 @@
+// The world: bodies, their contacts and the fixed step that moves them (docs/method.md §2.7-2.8).
+// Between impacts every body is rigid. A step of `time_step` seconds is split into `substeps`:
+// each substep applies gravity, solves the contacts softly, moves the bodies and relaxes (see
+// rigid/contact_solver.h); a restitution pass ends the step. Collisions are found with the paper's
+// uniform grid over body boxes, then per pair either between the bodies' convex pieces (hulls of
+// clusters of their own tets, the default) or, in the paper's mode, vertices against tets.
+//
+// Bodies are dynamic (a tet mesh with a material: mass and inertia exact from the tets), kinematic
+// (moved by the user at a set velocity) or static (planes, hulls, tet meshes). Bodies that stay
+// still for a while fall asleep by islands and cost nothing until touched, pushed or woken.
+//
+// Results are the same on any thread count: pairs come sorted from the broad phase, the narrow
+// phase writes per pair, and the solver runs in a fixed order. save() / restore() copy the whole
+// changing state (poses, velocities, sleep, contact caches, exclusions); state_hash() digests it.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "shatter/collide/broad_phase.h"
+#include "shatter/collide/contact.h"
+#include "shatter/collide/convex_decomposition.h"
+#include "shatter/collide/convex_hull.h"
+#include "shatter/collide/tet_contact.h"
+#include "shatter/core/error.h"
+#include "shatter/core/types.h"
+#include "shatter/rigid/body.h"
+#include "shatter/rigid/contact_solver.h"
+#include "shatter/rigid/integrate.h"
+
+namespace shatter {
+
+/// Index of a body in its world (bodies are never renumbered).
+using BodyId = Index;
+
+/// How a body moves.
+enum class BodyType : std::uint8_t {
+  static_body,  ///< never moves (infinite mass)
+  kinematic,    ///< moves at the velocity the user sets (infinite mass)
+  dynamic,      ///< moved by gravity and contacts
+};
+
+/// Which narrow phase tet bodies use with each other.
+enum class ContactMode : std::uint8_t {
+  convex_pieces,  ///< hulls of clusters of the body's tets, separating-axis manifolds (default)
+  tet_vertices,   ///< the paper: vertices in tets, plus boundary edges through boundary triangles
+};
+
+/// Collision filtering: bodies a and b may touch when (a.group & b.mask) and (b.group & a.mask).
+struct CollisionFilter {
+  std::uint32_t group = 1;           ///< bits this body belongs to
+  std::uint32_t mask = 0xffffffffU;  ///< bits it collides with
+};
+
+/// Surface properties. A pair uses the geometric mean of the frictions (Box2D's rule) and the
+/// larger restitution.
+struct SurfaceMaterial {
+  double friction = 0.6;     ///< Coulomb coefficient, >= 0
+  double restitution = 0.0;  ///< coefficient of restitution, 0..1
+};
+
+/// Everything to create a body besides its shape.
+struct BodyDef {
+  BodyType type = BodyType::dynamic;
+  RigidState rigid;  ///< pose and velocities (static bodies ignore the velocities)
+  SurfaceMaterial surface;
+  CollisionFilter filter;
+  bool can_sleep = true;
+  bool awake = true;  ///< start awake (false: asleep until touched)
+};
+
+/// Settings of a world.
+struct WorldSettings {
+  double time_step = 1.0 / 60.0;  ///< fixed step, s
+  /// Solver substeps per step. 8 (Box2D and Box3D use 4) because the contact spring can be at most
+  /// an eighth of the substep rate, and a stack's sag under its own weight is g / (2 pi f)^2 per
+  /// level: 8 substeps allow 60 Hz, a tenth of a millimetre per level of 0.5 m boxes (docs/performance.md).
+  int substeps = 8;
+  Vec3 gravity{0, -9.81, 0};                           ///< m/s^2 (Y up)
+  ContactSolverSettings contact{.contact_hertz = 60};  ///< contact spring, push-out cap, restitution threshold
+  ContactMode contact_mode = ContactMode::convex_pieces;
+  DecompositionOptions decomposition;  ///< convex pieces of tet bodies
+  /// Contacts are made for gaps up to this plus the distance the pair can close within a step, m.
+  double speculative_distance = 0.004;
+  bool enable_sleep = true;
+  double time_to_sleep = 0.5;    ///< s a whole island must stay slow before it sleeps
+  double sleep_velocity = 0.01;  ///< m/s: |v| + |w| r below this counts as slow
+};
+
+/// A contact between two bodies (one manifold), with what the solver did in the last step.
+struct Contact {
+  BodyId body_a = -1;
+  BodyId body_b = -1;
+  Index piece_a = -1;            ///< convex piece of A (-1: a plane or the tet mode)
+  Index piece_b = -1;            ///< convex piece of B
+  ContactConstraint constraint;  ///< normal, points, impulses (summed over the step), approach speeds
+  SatCache sat;                  ///< separating-axis cache of the piece pair
+};
+
+/// The complete changing state of a world (everything save() needs to resume bit for bit).
+struct WorldSnapshot {
+  struct Body {
+    RigidState rigid;
+    bool awake = true;
+    double sleep_time = 0;
+  };
+  std::vector<Body> bodies;
+  std::vector<Contact> contacts;
+  std::vector<std::array<BodyId, 2>> excluded;     ///< pairs that never touch
+  std::vector<std::array<BodyId, 2>> until_apart;  ///< pairs that touch only after first separating
+  std::int64_t step_count = 0;
+};
+
+/// Counts of the last step, for benchmarks and tests.
+struct StepStats {
+  std::int64_t awake_bodies = 0;
+  std::int64_t body_pairs = 0;  ///< pairs from the broad phase (and planes)
+  std::int64_t contacts = 0;    ///< manifolds solved
+  std::int64_t contact_points = 0;
+  std::int64_t islands = 0;
+  double broad_phase_ms = 0;  ///< wall time of each part
+  double narrow_phase_ms = 0;
+  double solver_ms = 0;
+};
+
+class World {
+ public:
+  explicit World(const WorldSettings& settings = {});
+
+  /// A tet body. Its convex pieces (or its tet-contact shape) are built from the model's mesh.
+  /// Errors: a model without mass for a dynamic body; a mesh whose pieces cannot be built.
+  Result<BodyId> add_body(std::shared_ptr<const BodyModel> model, const BodyDef& def);
+  /// A static or kinematic convex body given by its hull (in its own frame, placed by def.rigid).
+  /// Errors: a dynamic def (a hull has no material: give a tet body instead).
+  Result<BodyId> add_hull(ConvexHull hull, const BodyDef& def);
+  /// A static box of the given half extents, m, centred at def.rigid.position.
+  Result<BodyId> add_box(const Vec3& half_extents, const BodyDef& def);
+  /// A static plane (the ground): solid below `plane.normal . x = plane.offset`.
+  BodyId add_plane(const Plane& plane, const SurfaceMaterial& surface = {}, const CollisionFilter& filter = {});
+
+  /// Advance by one time step.
+  void step();
+
+  // Bodies.
+  [[nodiscard]] Index body_count() const { return static_cast<Index>(bodies_.size()); }
+  [[nodiscard]] BodyType body_type(BodyId id) const { return bodies_[id].type; }
+  [[nodiscard]] const RigidState& rigid_state(BodyId id) const { return bodies_[id].rigid; }
+  [[nodiscard]] const RigidInertia& inertia(BodyId id) const { return bodies_[id].inertia; }
+  /// The tet model of a body (null for planes and hulls).
+  [[nodiscard]] const BodyModel* model(BodyId id) const { return bodies_[id].model.get(); }
+  /// The convex pieces of a body (body frame).
+  [[nodiscard]] std::span<const ConvexHull> pieces(BodyId id) const;
+  [[nodiscard]] bool awake(BodyId id) const { return bodies_[id].awake; }
+  /// Set pose and velocities (wakes the body).
+  void set_rigid_state(BodyId id, const RigidState& rigid);
+  /// An impulse J (N s) at world point p (wakes the body).
+  void apply_impulse(BodyId id, const Vec3& impulse, const Vec3& point);
+  /// Wake a body (its island follows at the next step).
+  void wake(BodyId id);
+  /// World box of a body at its pose (infinite for planes).
+  [[nodiscard]] Aabb bounds(BodyId id) const;
+
+  // Pairs.
+  /// a and b never touch.
+  void exclude_pair(BodyId a, BodyId b);
+  /// a and b do not touch until the narrow phase first finds them apart (siblings of one crack).
+  void exclude_until_apart(BodyId a, BodyId b);
+
+  /// Contacts of the last step, sorted by (body_a, body_b, piece_a, piece_b).
+  [[nodiscard]] std::span<const Contact> contacts() const { return contacts_; }
+  [[nodiscard]] const StepStats& stats() const { return stats_; }
+  [[nodiscard]] const WorldSettings& settings() const { return settings_; }
+  [[nodiscard]] std::int64_t step_count() const { return step_count_; }
+  /// Simulated time, s.
+  [[nodiscard]] double time() const { return static_cast<double>(step_count_) * settings_.time_step; }
+
+  // State.
+  [[nodiscard]] WorldSnapshot save() const;
+  /// Resume from a snapshot of this world (same bodies). Errors: a snapshot of another body set.
+  Result<void> restore(const WorldSnapshot& snapshot);
+  /// xxHash64 of poses, velocities, sleep state, contact caches and exclusions.
+  [[nodiscard]] std::uint64_t state_hash() const;
+
+  /// Total kinetic energy of the dynamic bodies, J.
+  [[nodiscard]] double kinetic_energy() const;
+
+ private:
+  struct Shape {
+    std::vector<ConvexHull> pieces;    ///< body frame
+    std::vector<TetContactShape> tet;  ///< 0 or 1 (the paper's mode)
+    bool is_plane = false;
+    Plane plane;        ///< world
+    Aabb local_bounds;  ///< body frame
+    double radius = 0;  ///< farthest point from the centre of mass, m
+  };
+  struct Body {
+    BodyType type = BodyType::dynamic;
+    std::shared_ptr<const BodyModel> model;
+    std::shared_ptr<const Shape> shape;
+    RigidInertia inertia;
+    RigidState rigid;
+    SurfaceMaterial surface;
+    CollisionFilter filter;
+    bool can_sleep = true;
+    bool awake = true;
+    double sleep_time = 0;
+  };
+  struct PairRef {
+    BodyId a, b;
+  };
+
+  BodyId add(Body body);
+  [[nodiscard]] double motion_bound(const Body& b) const;
+  void find_pairs(std::vector<PairRef>& pairs);
+  void narrow_phase(const std::vector<PairRef>& pairs);
+  void update_islands_and_wake();
+  void solve();
+  void update_sleep();
+  [[nodiscard]] bool pair_excluded(BodyId a, BodyId b) const;
+
+  WorldSettings settings_;
+  std::vector<Body> bodies_;
+  std::vector<Contact> contacts_;                   ///< sorted by key
+  std::vector<std::array<BodyId, 2>> excluded_;     ///< sorted
+  std::vector<std::array<BodyId, 2>> until_apart_;  ///< sorted
+  std::int64_t step_count_ = 0;
+  StepStats stats_;
+  BroadPhase broad_phase_;
+  // Scratch kept between steps.
+  std::vector<Aabb> boxes_;
+  std::vector<PairRef> pairs_;
+  std::vector<std::vector<Contact>> pair_contacts_;
+  std::vector<SolverBody> solver_bodies_;
+  std::vector<Index> island_parent_;
+  std::vector<Index> island_of_;
+};
+
+}  // namespace shatter

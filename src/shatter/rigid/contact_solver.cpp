@@ -1,0 +1,196 @@
+// Soft-step contact solver (see contact_solver.h).
+#include "shatter/rigid/contact_solver.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace shatter {
+namespace {
+
+// Velocity of the material point at offset r of body b, m/s.
+Vec3 point_velocity(const SolverBody& b, const Vec3& r) { return b.linear_velocity + b.angular_velocity.cross(r); }
+
+// Apply impulse `j` (on B; -j on A) at offsets ra, rb.
+void apply_impulse(SolverBody& a, SolverBody& b, const Vec3& ra, const Vec3& rb, const Vec3& j) {
+  a.linear_velocity -= a.inverse_mass * j;
+  a.angular_velocity -= a.inverse_inertia * ra.cross(j);
+  b.linear_velocity += b.inverse_mass * j;
+  b.angular_velocity += b.inverse_inertia * rb.cross(j);
+}
+
+// Apply angular impulse `t` about the world axis (on B; -t on A).
+void apply_angular_impulse(SolverBody& a, SolverBody& b, const Vec3& t) {
+  a.angular_velocity -= a.inverse_inertia * t;
+  b.angular_velocity += b.inverse_inertia * t;
+}
+
+// 1 / (J M^-1 J^T) along direction d, or 0 when neither body can respond.
+double effective_mass(const SolverBody& a, const SolverBody& b, const Vec3& ra, const Vec3& rb, const Vec3& d) {
+  const Vec3 rna = ra.cross(d);
+  const Vec3 rnb = rb.cross(d);
+  const double k =
+      a.inverse_mass + b.inverse_mass + rna.dot(a.inverse_inertia * rna) + rnb.dot(b.inverse_inertia * rnb);
+  return k > 0 ? 1.0 / k : 0.0;
+}
+
+// One normal row: the accumulated impulse moves by -m (scale vn + bias) - impulse_scale * lambda,
+// clamped at 0 (Box2D's soft contact). Returns the impulse applied.
+double solve_normal(ContactConstraint& c, ContactPoint& p, SolverBody& a, SolverBody& b, double bias, double mass_scale,
+                    double impulse_scale) {
+  const double vn = (point_velocity(b, p.anchor_b) - point_velocity(a, p.anchor_a)).dot(c.normal);
+  const double delta = -p.normal_mass * (mass_scale * vn + bias) - impulse_scale * p.normal_impulse;
+  const double next = std::max(p.normal_impulse + delta, 0.0);
+  const double applied = next - p.normal_impulse;
+  p.normal_impulse = next;
+  p.max_normal_impulse = std::max(p.max_normal_impulse, next);
+  p.total_normal_impulse += applied;
+  apply_impulse(a, b, p.anchor_a, p.anchor_b, applied * c.normal);
+  return applied;
+}
+
+}  // namespace
+
+Softness make_softness(double hertz, double damping_ratio, double h) {
+  if (hertz == 0) return {0, 1, 0};
+  const double omega = 2 * std::numbers::pi * hertz;
+  const double a1 = 2 * damping_ratio + h * omega;
+  const double a2 = h * omega * a1;
+  const double a3 = 1 / (1 + a2);
+  return {omega / a1, a2 * a3, a3};
+}
+
+std::array<Vec3, 2> tangent_basis(const Vec3& n) {
+  const double sign = std::copysign(1.0, n.z());
+  const double a = -1.0 / (sign + n.z());
+  const double b = n.x() * n.y() * a;
+  return {Vec3(1 + sign * n.x() * n.x() * a, sign * b, -sign * n.x()), Vec3(b, sign + n.y() * n.y() * a, -n.y())};
+}
+
+void prepare_contact(ContactConstraint& c, std::span<const SolverBody> bodies, double speculative_distance) {
+  const SolverBody& a = bodies[c.body_a];
+  const SolverBody& b = bodies[c.body_b];
+  c.tangents = tangent_basis(c.normal);
+  // Friction centre: the mean of the points, those with a gap fading out over the speculative
+  // distance so that the centre moves smoothly as points come and go (Box3D's weighting).
+  Vec3 centre_a = Vec3::Zero(), centre_b = Vec3::Zero();
+  double weight_sum = 0;
+  for (int i = 0; i < c.count; ++i) {
+    ContactPoint& p = c.points[i];
+    p.normal_mass = effective_mass(a, b, p.anchor_a, p.anchor_b, c.normal);
+    const Vec3 dv = point_velocity(b, p.anchor_b) - point_velocity(a, p.anchor_a);
+    p.approach_speed = -dv.dot(c.normal);
+    p.max_normal_impulse = 0;
+    p.total_normal_impulse = 0;
+    const double weight =
+        speculative_distance > 0 ? std::clamp(2.0 - p.separation / speculative_distance, 1e-3, 1.0) : 1.0;
+    centre_a += weight * p.anchor_a;
+    centre_b += weight * p.anchor_b;
+    weight_sum += weight;
+  }
+  c.centre_a = centre_a / weight_sum;
+  c.centre_b = centre_b / weight_sum;
+  for (int i = 0; i < c.count; ++i) c.points[i].lever_arm = (c.points[i].anchor_a - c.centre_a).norm();
+  // Coupled tangent mass at the centre: K_ij = (1/mA + 1/mB) d_ij + (rA x t_i) IA^-1 (rA x t_j) + (B).
+  std::array<Vec3, 2> ta, tb;
+  for (int k = 0; k < 2; ++k) {
+    ta[k] = c.centre_a.cross(c.tangents[k]);
+    tb[k] = c.centre_b.cross(c.tangents[k]);
+  }
+  Eigen::Matrix2d kt;
+  for (int i = 0; i < 2; ++i)
+    for (int j = 0; j < 2; ++j)
+      kt(i, j) = (i == j ? a.inverse_mass + b.inverse_mass : 0.0) + ta[i].dot(a.inverse_inertia * ta[j]) +
+                 tb[i].dot(b.inverse_inertia * tb[j]);
+  const double det = kt.determinant();
+  c.tangent_mass = det > 0 ? Eigen::Matrix2d(kt.inverse()) : Eigen::Matrix2d::Zero();
+  const double kw = c.normal.dot((a.inverse_inertia + b.inverse_inertia) * c.normal);
+  c.twist_mass = kw > 0 ? 1.0 / kw : 0.0;
+  c.total_friction_impulse.setZero();
+}
+
+void warm_start_contact(ContactConstraint& c, std::span<SolverBody> bodies) {
+  SolverBody& a = bodies[c.body_a];
+  SolverBody& b = bodies[c.body_b];
+  for (int i = 0; i < c.count; ++i) {
+    ContactPoint& p = c.points[i];
+    apply_impulse(a, b, p.anchor_a, p.anchor_b, p.normal_impulse * c.normal);
+    p.total_normal_impulse += p.normal_impulse;
+  }
+  const Vec3 f = c.friction_impulse.x() * c.tangents[0] + c.friction_impulse.y() * c.tangents[1];
+  apply_impulse(a, b, c.centre_a, c.centre_b, f);
+  apply_angular_impulse(a, b, c.twist_impulse * c.normal);
+  c.total_friction_impulse += f;
+}
+
+double current_separation(const ContactConstraint& c, const ContactPoint& p, std::span<const SolverBody> bodies) {
+  const SolverBody& a = bodies[c.body_a];
+  const SolverBody& b = bodies[c.body_b];
+  const Vec3 pa = a.position + a.rotation * p.local_anchor_a;
+  const Vec3 pb = b.position + b.rotation * p.local_anchor_b;
+  return p.separation + (pb - pa).dot(c.normal);
+}
+
+void solve_contact(ContactConstraint& c, std::span<SolverBody> bodies, double inverse_h, bool use_bias,
+                   double max_push_velocity) {
+  SolverBody& a = bodies[c.body_a];
+  SolverBody& b = bodies[c.body_b];
+  double total_normal = 0;
+  double twist_limit = 0;
+  for (int i = 0; i < c.count; ++i) {
+    ContactPoint& p = c.points[i];
+    const double s = current_separation(c, p, bodies);
+    if (use_bias) {
+      // The fastest approach met before a solve in this step: the impact speed, which the step's
+      // start velocity underestimates by up to g dt when the impact falls late in the step.
+      const double vn = (point_velocity(b, p.anchor_b) - point_velocity(a, p.anchor_a)).dot(c.normal);
+      p.approach_speed = std::max(p.approach_speed, -vn);
+    }
+    if (s > 0) {
+      solve_normal(c, p, a, b, s * inverse_h, 1, 0);  // speculative: close the gap within the substep, no more
+    } else if (use_bias) {
+      const Softness& soft = c.softness;
+      solve_normal(c, p, a, b, std::max(soft.mass_scale * soft.bias_rate * s, -max_push_velocity), soft.mass_scale,
+                   soft.impulse_scale);
+    } else {
+      solve_normal(c, p, a, b, 0, 1, 0);
+    }
+    total_normal += p.normal_impulse;
+    twist_limit += p.lever_arm * p.normal_impulse;
+  }
+  // Twist friction about the normal.
+  {
+    const double spin = c.normal.dot(b.angular_velocity - a.angular_velocity);
+    const double limit = c.friction * twist_limit;
+    const double next = std::clamp(c.twist_impulse - c.twist_mass * spin, -limit, limit);
+    apply_angular_impulse(a, b, (next - c.twist_impulse) * c.normal);
+    c.twist_impulse = next;
+  }
+  // Coulomb friction at the centre, the tangent impulse clamped to the friction disc.
+  {
+    const Vec3 dv = point_velocity(b, c.centre_b) - point_velocity(a, c.centre_a);
+    const Eigen::Vector2d vt(dv.dot(c.tangents[0]), dv.dot(c.tangents[1]));
+    Eigen::Vector2d next = c.friction_impulse - c.tangent_mass * vt;
+    const double limit = c.friction * total_normal;
+    const double norm = next.norm();
+    if (norm > limit) next *= norm > 0 ? limit / norm : 0.0;
+    const Eigen::Vector2d delta = next - c.friction_impulse;
+    c.friction_impulse = next;
+    const Vec3 applied = delta.x() * c.tangents[0] + delta.y() * c.tangents[1];
+    c.total_friction_impulse += applied;
+    apply_impulse(a, b, c.centre_a, c.centre_b, applied);
+  }
+}
+
+void apply_restitution(ContactConstraint& c, std::span<SolverBody> bodies, double threshold) {
+  if (c.restitution == 0) return;
+  SolverBody& a = bodies[c.body_a];
+  SolverBody& b = bodies[c.body_b];
+  for (int i = 0; i < c.count; ++i) {
+    ContactPoint& p = c.points[i];
+    if (p.approach_speed < threshold || p.max_normal_impulse == 0) continue;
+    solve_normal(c, p, a, b, -c.restitution * p.approach_speed, 1, 0);
+  }
+}
+
+}  // namespace shatter

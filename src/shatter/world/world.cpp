@@ -1,0 +1,638 @@
+// The world's step (see world.h).
+#include "shatter/world/world.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <tuple>
+#include <utility>
+
+#include "shatter/core/hash.h"
+#include "shatter/core/parallel.h"
+
+namespace shatter {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+Transform transform_of(const RigidState& r) { return {r.orientation.toRotationMatrix(), r.position}; }
+
+// World box of a body-frame box under a rigid placement.
+Aabb transform_box(const Aabb& local, const Transform& t) {
+  if (local.empty()) return local;
+  const Vec3 centre = t.apply(0.5 * (local.min + local.max));
+  const Vec3 half = t.rotation.cwiseAbs() * (0.5 * (local.max - local.min));
+  Aabb out;
+  out.min = centre - half;
+  out.max = centre + half;
+  return out;
+}
+
+Aabb grow(Aabb box, double margin) {
+  if (box.empty()) return box;
+  box.min.array() -= margin;
+  box.max.array() += margin;
+  return box;
+}
+
+auto contact_key(const Contact& c) { return std::tie(c.body_a, c.body_b, c.piece_a, c.piece_b); }
+
+bool key_less(const Contact& x, const Contact& y) { return contact_key(x) < contact_key(y); }
+
+// Union-find root with path halving.
+Index find_root(std::vector<Index>& parent, Index i) {
+  while (parent[i] != i) {
+    parent[i] = parent[parent[i]];
+    i = parent[i];
+  }
+  return i;
+}
+
+void unite(std::vector<Index>& parent, Index a, Index b) {
+  a = find_root(parent, a);
+  b = find_root(parent, b);
+  if (a == b) return;
+  if (a < b) std::swap(a, b);  // the lower index is the root: independent of the contact order
+  parent[a] = b;
+}
+
+bool contains_pair(const std::vector<std::array<BodyId, 2>>& sorted, BodyId a, BodyId b) {
+  return std::binary_search(sorted.begin(), sorted.end(), std::array<BodyId, 2>{a, b});
+}
+
+void insert_pair(std::vector<std::array<BodyId, 2>>& sorted, BodyId a, BodyId b) {
+  const std::array<BodyId, 2> key{std::min(a, b), std::max(a, b)};
+  const auto it = std::lower_bound(sorted.begin(), sorted.end(), key);
+  if (it == sorted.end() || *it != key) sorted.insert(it, key);
+}
+
+}  // namespace
+
+World::World(const WorldSettings& settings) : settings_(settings) {}
+
+BodyId World::add(Body body) {
+  body.rigid.orientation.normalize();
+  if (body.type == BodyType::static_body) {
+    body.rigid.linear_velocity.setZero();
+    body.rigid.angular_velocity.setZero();
+    body.awake = false;
+  }
+  bodies_.push_back(std::move(body));
+  return static_cast<BodyId>(bodies_.size() - 1);
+}
+
+Result<BodyId> World::add_body(std::shared_ptr<const BodyModel> model, const BodyDef& def) {
+  if (!model) return make_error("add_body: no body model given");
+  if (model->mesh.tets.empty()) return make_error("add_body: the body model has no tets");
+  if (def.type == BodyType::dynamic && !(model->mass.mass > 0))
+    return make_error("add_body: a dynamic body needs a positive mass (check the material density)");
+  auto shape = std::make_shared<Shape>();
+  auto pieces = decompose_convex(model->mesh, model->faces, settings_.decomposition);
+  if (!pieces) return make_error("add_body: the convex pieces could not be built: " + pieces.error().message);
+  for (ConvexPiece& p : *pieces) shape->pieces.push_back(std::move(p.hull));
+  if (settings_.contact_mode == ContactMode::tet_vertices)
+    shape->tet.push_back(make_tet_contact_shape(model->mesh, model->faces));
+  for (const Vec3& x : model->mesh.positions) {
+    shape->local_bounds.extend(x);
+    shape->radius = std::max(shape->radius, x.norm());
+  }
+  Body body;
+  body.type = def.type;
+  body.model = std::move(model);
+  body.shape = std::move(shape);
+  if (def.type == BodyType::dynamic) body.inertia = rigid_inertia(body.model->mass);
+  body.rigid = def.rigid;
+  body.surface = def.surface;
+  body.filter = def.filter;
+  body.can_sleep = def.can_sleep;
+  body.awake = def.awake;
+  return add(std::move(body));
+}
+
+Result<BodyId> World::add_hull(ConvexHull hull, const BodyDef& def) {
+  if (def.type == BodyType::dynamic)
+    return make_error(
+        "add_hull: a hull body must be static or kinematic (a dynamic body needs a tet mesh and a material)");
+  if (hull.vertices.empty()) return make_error("add_hull: the hull is empty");
+  auto shape = std::make_shared<Shape>();
+  shape->local_bounds = hull.bounds;
+  for (const Vec3& v : hull.vertices) shape->radius = std::max(shape->radius, v.norm());
+  shape->pieces.push_back(std::move(hull));
+  Body body;
+  body.type = def.type;
+  body.shape = std::move(shape);
+  body.rigid = def.rigid;
+  body.surface = def.surface;
+  body.filter = def.filter;
+  body.can_sleep = def.can_sleep;
+  body.awake = def.awake;
+  return add(std::move(body));
+}
+
+Result<BodyId> World::add_box(const Vec3& half_extents, const BodyDef& def) {
+  if (!(half_extents.array() > 0).all() || !half_extents.allFinite())
+    return make_error("add_box: half extents must be positive and finite");
+  std::array<Vec3, 8> corners;
+  for (int i = 0; i < 8; ++i)
+    corners[i] = Vec3((i & 1) ? half_extents.x() : -half_extents.x(), (i & 2) ? half_extents.y() : -half_extents.y(),
+                      (i & 4) ? half_extents.z() : -half_extents.z());
+  auto hull = build_convex_hull(corners);
+  if (!hull) return hull.error();
+  return add_hull(std::move(*hull), def);
+}
+
+BodyId World::add_plane(const Plane& plane, const SurfaceMaterial& surface, const CollisionFilter& filter) {
+  auto shape = std::make_shared<Shape>();
+  shape->is_plane = true;
+  shape->plane = plane;
+  shape->plane.normal.normalize();
+  Body body;
+  body.type = BodyType::static_body;
+  body.shape = std::move(shape);
+  body.surface = surface;
+  body.filter = filter;
+  return add(std::move(body));
+}
+
+std::span<const ConvexHull> World::pieces(BodyId id) const { return bodies_[id].shape->pieces; }
+
+void World::set_rigid_state(BodyId id, const RigidState& rigid) {
+  Body& b = bodies_[id];
+  b.rigid = rigid;
+  b.rigid.orientation.normalize();
+  if (b.type == BodyType::static_body) {
+    b.rigid.linear_velocity.setZero();
+    b.rigid.angular_velocity.setZero();
+    return;
+  }
+  wake(id);
+}
+
+void World::apply_impulse(BodyId id, const Vec3& impulse, const Vec3& point) {
+  Body& b = bodies_[id];
+  if (b.type != BodyType::dynamic) return;
+  b.rigid.linear_velocity += b.inertia.inverse_mass * impulse;
+  b.rigid.angular_velocity +=
+      world_inverse_inertia(b.inertia, b.rigid.orientation) * (point - b.rigid.position).cross(impulse);
+  wake(id);
+}
+
+void World::wake(BodyId id) {
+  Body& b = bodies_[id];
+  if (b.type == BodyType::static_body) return;
+  b.awake = true;
+  b.sleep_time = 0;
+}
+
+Aabb World::bounds(BodyId id) const {
+  const Body& b = bodies_[id];
+  if (b.shape->is_plane) {
+    Aabb all;
+    all.min.setConstant(-std::numeric_limits<double>::infinity());
+    all.max.setConstant(std::numeric_limits<double>::infinity());
+    return all;
+  }
+  return transform_box(b.shape->local_bounds, transform_of(b.rigid));
+}
+
+void World::exclude_pair(BodyId a, BodyId b) { insert_pair(excluded_, a, b); }
+
+void World::exclude_until_apart(BodyId a, BodyId b) { insert_pair(until_apart_, a, b); }
+
+bool World::pair_excluded(BodyId a, BodyId b) const { return contains_pair(excluded_, a, b); }
+
+double World::motion_bound(const Body& b) const {
+  if (b.type == BodyType::static_body || !b.awake) return 0;
+  return settings_.time_step * (b.rigid.linear_velocity.norm() + b.rigid.angular_velocity.norm() * b.shape->radius);
+}
+
+void World::find_pairs(std::vector<PairRef>& pairs) {
+  const Index n = body_count();
+  const double half_margin = 0.5 * settings_.speculative_distance;
+  boxes_.resize(n);
+  for (Index i = 0; i < n; ++i) {
+    const Body& b = bodies_[i];
+    boxes_[i] = b.shape->is_plane ? Aabb{} : grow(bounds(i), half_margin + motion_bound(b));
+  }
+  pairs.clear();
+  for (const BodyPair& p : broad_phase_.find_pairs(boxes_)) pairs.push_back({p.first, p.second});
+  for (Index p = 0; p < n; ++p) {
+    if (!bodies_[p].shape->is_plane) continue;
+    const Plane& plane = bodies_[p].shape->plane;
+    for (Index i = 0; i < n; ++i) {
+      if (bodies_[i].shape->is_plane || boxes_[i].empty() || bodies_[i].type == BodyType::static_body) continue;
+      const Vec3 centre = 0.5 * (boxes_[i].min + boxes_[i].max);
+      const Vec3 half = 0.5 * (boxes_[i].max - boxes_[i].min);
+      const double lowest = plane.normal.dot(centre) - plane.normal.cwiseAbs().dot(half) - plane.offset;
+      if (lowest <= half_margin) pairs.push_back({std::min(p, i), std::max(p, i)});
+    }
+  }
+  // Keep pairs with at least one dynamic body and one awake, that the filters allow.
+  std::erase_if(pairs, [&](const PairRef& pr) {
+    const Body& a = bodies_[pr.a];
+    const Body& b = bodies_[pr.b];
+    if (a.type != BodyType::dynamic && b.type != BodyType::dynamic) return true;
+    if (!(a.filter.group & b.filter.mask) || !(b.filter.group & a.filter.mask)) return true;
+    return pair_excluded(pr.a, pr.b);
+  });
+  std::sort(pairs.begin(), pairs.end(),
+            [](const PairRef& x, const PairRef& y) { return std::tie(x.a, x.b) < std::tie(y.a, y.b); });
+}
+
+void World::narrow_phase(const std::vector<PairRef>& pairs) {
+  const std::vector<Contact>& old = contacts_;
+  pair_contacts_.resize(pairs.size());
+  const bool tet_mode = settings_.contact_mode == ContactMode::tet_vertices;
+  parallel_for(
+      0, static_cast<std::int64_t>(pairs.size()),
+      [&](std::int64_t k) {
+        std::vector<Contact>& out = pair_contacts_[k];
+        out.clear();
+        const BodyId ia = pairs[k].a;
+        const BodyId ib = pairs[k].b;
+        const Body& a = bodies_[ia];
+        const Body& b = bodies_[ib];
+        Contact probe;
+        probe.body_a = ia;
+        probe.body_b = ib;
+        probe.piece_a = std::numeric_limits<Index>::min();
+        const auto first_old = std::lower_bound(old.begin(), old.end(), probe, key_less);
+        auto old_end = first_old;
+        while (old_end != old.end() && old_end->body_a == ia && old_end->body_b == ib) ++old_end;
+        if (!a.awake && !b.awake) {  // both asleep or static: nothing moved, keep what was found
+          out.assign(first_old, old_end);
+          return;
+        }
+        const double spec = settings_.speculative_distance + motion_bound(a) + motion_bound(b);
+        const Transform ta = transform_of(a.rigid);
+        const Transform tb = transform_of(b.rigid);
+        auto add_manifold = [&](const ContactManifold& m, Index pa, Index pb, const SatCache& sat) {
+          if (m.count == 0) return;
+          Contact c;
+          c.body_a = ia;
+          c.body_b = ib;
+          c.piece_a = pa;
+          c.piece_b = pb;
+          c.sat = sat;
+          c.constraint.normal = m.normal;
+          c.constraint.count = m.count;
+          for (int i = 0; i < m.count; ++i) {
+            c.constraint.points[i].position = m.points[i].point;
+            c.constraint.points[i].separation = m.points[i].separation;
+            c.constraint.points[i].feature = m.points[i].feature;
+          }
+          out.push_back(c);
+        };
+        auto add_points = [&](const std::vector<PointContact>& points) {
+          for (const PointContact& p : points) {
+            ContactManifold m;
+            m.normal = p.normal;
+            m.count = 1;
+            m.points[0] = {p.point, p.separation, p.feature};
+            add_manifold(m, -1, -1, {});
+          }
+        };
+        if (a.shape->is_plane || b.shape->is_plane) {
+          const bool plane_first = a.shape->is_plane;
+          const Body& body = plane_first ? b : a;
+          const Transform& tbody = plane_first ? tb : ta;
+          const Plane& plane = (plane_first ? a : b).shape->plane;
+          if (tet_mode && !body.shape->tet.empty()) {
+            std::vector<PointContact> points;
+            collide_tet_shape_plane(body.shape->tet[0], tbody, plane, spec, points);
+            if (plane_first)
+              for (PointContact& p : points) p.normal = -p.normal;
+            add_points(points);
+            return;
+          }
+          const auto& pieces = body.shape->pieces;
+          for (Index i = 0; i < static_cast<Index>(pieces.size()); ++i) {
+            ContactManifold m = collide_hull_plane(pieces[i], tbody, plane, spec);
+            if (plane_first) m.normal = -m.normal;  // from the plane (A) to the hull (B)
+            add_manifold(m, plane_first ? -1 : i, plane_first ? i : -1, {});
+          }
+          return;
+        }
+        if (tet_mode && !a.shape->tet.empty() && !b.shape->tet.empty()) {
+          std::vector<PointContact> points;
+          collide_tet_shapes(a.shape->tet[0], ta, b.shape->tet[0], tb, spec, points);
+          add_points(points);
+          return;
+        }
+        const auto& pa = a.shape->pieces;
+        const auto& pb = b.shape->pieces;
+        std::vector<Aabb> boxes_b(pb.size());
+        for (std::size_t j = 0; j < pb.size(); ++j) boxes_b[j] = grow(transform_box(pb[j].bounds, tb), spec);
+        auto old_it = first_old;
+        for (Index i = 0; i < static_cast<Index>(pa.size()); ++i) {
+          const Aabb box_a = transform_box(pa[i].bounds, ta);
+          for (Index j = 0; j < static_cast<Index>(pb.size()); ++j) {
+            if (!boxes_overlap(box_a, boxes_b[j])) continue;
+            SatCache sat;
+            while (old_it != old_end && std::tie(old_it->piece_a, old_it->piece_b) < std::tie(i, j)) ++old_it;
+            if (old_it != old_end && old_it->piece_a == i && old_it->piece_b == j) sat = old_it->sat;
+            const ContactManifold m = collide_hulls(pa[i], ta, pb[j], tb, spec, &sat);
+            add_manifold(m, i, j, sat);
+          }
+        }
+      },
+      512);  // a box pair costs about a microsecond: go parallel only with hundreds of pairs
+
+  // Gather in pair order, carry the impulses of matching features (warm start), and settle the
+  // pairs waiting to come apart.
+  std::vector<Contact> next;
+  std::vector<std::array<BodyId, 2>> still_together;
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    std::vector<Contact>& found = pair_contacts_[k];
+    if (contains_pair(until_apart_, pairs[k].a, pairs[k].b)) {
+      if (!found.empty()) still_together.push_back({pairs[k].a, pairs[k].b});
+      continue;
+    }
+    for (Contact& c : found) {
+      const auto [lo, hi] = std::equal_range(old.begin(), old.end(), c, key_less);
+      ContactConstraint& cc = c.constraint;
+      cc.tangents = tangent_basis(cc.normal);
+      bool manifold_matched = false;
+      for (int i = 0; i < cc.count; ++i) {
+        ContactPoint& p = cc.points[i];
+        for (auto it = lo; it != hi; ++it) {
+          const ContactConstraint& oc = it->constraint;
+          const auto match = std::find_if(oc.points.begin(), oc.points.begin() + oc.count,
+                                          [&](const ContactPoint& q) { return q.feature == p.feature; });
+          if (match == oc.points.begin() + oc.count) continue;
+          // Same feature pair: keep its normal impulse; the manifold's friction and twist carry
+          // over when it is the same manifold (re-expressed in the new tangents).
+          p.normal_impulse = match->normal_impulse;
+          if (!manifold_matched) {
+            manifold_matched = true;
+            const Vec3 f = oc.friction_impulse.x() * oc.tangents[0] + oc.friction_impulse.y() * oc.tangents[1];
+            cc.friction_impulse = {f.dot(cc.tangents[0]), f.dot(cc.tangents[1])};
+            cc.twist_impulse = oc.twist_impulse * oc.normal.dot(cc.normal);
+          }
+          break;
+        }
+      }
+      next.push_back(std::move(c));
+    }
+  }
+  until_apart_ = std::move(still_together);
+  contacts_ = std::move(next);
+}
+
+void World::update_islands_and_wake() {
+  const Index n = body_count();
+  island_parent_.resize(n);
+  std::iota(island_parent_.begin(), island_parent_.end(), 0);
+  for (const Contact& c : contacts_) {
+    const Body& a = bodies_[c.body_a];
+    const Body& b = bodies_[c.body_b];
+    if (a.type == BodyType::dynamic && b.type == BodyType::dynamic) unite(island_parent_, c.body_a, c.body_b);
+    // A moving kinematic body wakes what it touches.
+    auto moving = [](const Body& k) {
+      return k.type == BodyType::kinematic &&
+             (k.rigid.linear_velocity.squaredNorm() > 0 || k.rigid.angular_velocity.squaredNorm() > 0);
+    };
+    if (moving(a)) wake(c.body_b);
+    if (moving(b)) wake(c.body_a);
+  }
+  // An island with one awake body is awake as a whole.
+  std::vector<char> island_awake(n, 0);
+  for (Index i = 0; i < n; ++i)
+    if (bodies_[i].type == BodyType::dynamic && bodies_[i].awake) island_awake[find_root(island_parent_, i)] = 1;
+  stats_.islands = 0;
+  island_of_.assign(n, -1);
+  for (Index i = 0; i < n; ++i) {
+    if (bodies_[i].type != BodyType::dynamic) continue;
+    const Index root = find_root(island_parent_, i);
+    island_of_[i] = root;
+    if (root == i) ++stats_.islands;
+    if (island_awake[root] && !bodies_[i].awake) wake(i);
+  }
+}
+
+void World::solve() {
+  const Index n = body_count();
+  const double h = settings_.time_step / settings_.substeps;
+  const double inverse_h = 1.0 / h;
+  // Box3D's choices: the spring at most an eighth of the substep rate; contacts with static and
+  // kinematic bodies twice as stiff and half as damped, so nothing is pushed into the ground.
+  const double hertz = std::min(settings_.contact.contact_hertz, 0.125 / h);
+  const Softness soft = make_softness(hertz, settings_.contact.damping_ratio, h);
+  const Softness static_soft = make_softness(2 * hertz, 0.5 * settings_.contact.damping_ratio, h);
+
+  solver_bodies_.resize(n);
+  for (Index i = 0; i < n; ++i) {
+    const Body& b = bodies_[i];
+    SolverBody& s = solver_bodies_[i];
+    const bool moves = b.awake && b.type != BodyType::static_body;
+    s.linear_velocity = moves ? b.rigid.linear_velocity : Vec3::Zero();
+    s.angular_velocity = moves ? b.rigid.angular_velocity : Vec3::Zero();
+    const bool responds = moves && b.type == BodyType::dynamic;
+    s.inverse_mass = responds ? b.inertia.inverse_mass : 0.0;
+    s.inverse_inertia = responds ? world_inverse_inertia(b.inertia, b.rigid.orientation) : Mat3::Zero();
+    s.position = b.rigid.position;
+    s.rotation = b.rigid.orientation.toRotationMatrix();
+  }
+
+  // Active constraints: those touching an awake dynamic body.
+  std::vector<ContactConstraint*> active;
+  stats_.contact_points = 0;
+  for (Contact& c : contacts_) {
+    const Body& a = bodies_[c.body_a];
+    const Body& b = bodies_[c.body_b];
+    const bool live = (a.type == BodyType::dynamic && a.awake) || (b.type == BodyType::dynamic && b.awake);
+    if (!live) continue;
+    ContactConstraint& cc = c.constraint;
+    cc.body_a = c.body_a;
+    cc.body_b = c.body_b;
+    cc.friction = std::sqrt(a.surface.friction * b.surface.friction);
+    cc.restitution = std::max(a.surface.restitution, b.surface.restitution);
+    cc.softness = (a.type == BodyType::dynamic && b.type == BodyType::dynamic) ? soft : static_soft;
+    const SolverBody& sa = solver_bodies_[c.body_a];
+    const SolverBody& sb = solver_bodies_[c.body_b];
+    for (int i = 0; i < cc.count; ++i) {
+      ContactPoint& p = cc.points[i];
+      p.anchor_a = p.position - sa.position;
+      p.anchor_b = p.position - sb.position;
+      p.local_anchor_a = sa.rotation.transpose() * p.anchor_a;
+      p.local_anchor_b = sb.rotation.transpose() * p.anchor_b;
+    }
+    prepare_contact(cc, solver_bodies_, settings_.speculative_distance);
+    active.push_back(&cc);
+    stats_.contact_points += cc.count;
+  }
+  stats_.contacts = static_cast<std::int64_t>(active.size());
+
+  std::vector<Index> moving;
+  for (Index i = 0; i < n; ++i)
+    if (bodies_[i].awake && bodies_[i].type != BodyType::static_body) moving.push_back(i);
+  stats_.awake_bodies = static_cast<std::int64_t>(moving.size());
+  const Vec3 dv_gravity = h * settings_.gravity;
+  const auto num_moving = static_cast<std::int64_t>(moving.size());
+
+  for (int sub = 0; sub < settings_.substeps; ++sub) {
+    parallel_for(
+        0, num_moving,
+        [&](std::int64_t k) {
+          const Index i = moving[k];
+          if (bodies_[i].type == BodyType::dynamic) solver_bodies_[i].linear_velocity += dv_gravity;
+        },
+        4096);
+    for (ContactConstraint* c : active) warm_start_contact(*c, solver_bodies_);
+    for (ContactConstraint* c : active)
+      solve_contact(*c, solver_bodies_, inverse_h, true, settings_.contact.max_push_velocity);
+    parallel_for(
+        0, num_moving,
+        [&](std::int64_t k) {
+          const Index i = moving[k];
+          Body& b = bodies_[i];
+          SolverBody& s = solver_bodies_[i];
+          b.rigid.linear_velocity = s.linear_velocity;
+          b.rigid.angular_velocity = s.angular_velocity;
+          integrate_position(b.inertia, b.rigid, h);
+          s.angular_velocity = b.rigid.angular_velocity;
+          s.position = b.rigid.position;
+          s.rotation = b.rigid.orientation.toRotationMatrix();
+        },
+        256);
+    for (ContactConstraint* c : active)
+      solve_contact(*c, solver_bodies_, inverse_h, false, settings_.contact.max_push_velocity);
+  }
+  for (ContactConstraint* c : active) apply_restitution(*c, solver_bodies_, settings_.contact.restitution_threshold);
+  for (const Index i : moving) {
+    bodies_[i].rigid.linear_velocity = solver_bodies_[i].linear_velocity;
+    bodies_[i].rigid.angular_velocity = solver_bodies_[i].angular_velocity;
+  }
+}
+
+void World::update_sleep() {
+  const Index n = body_count();
+  const double dt = settings_.time_step;
+  if (!settings_.enable_sleep) return;
+  // Bodies pushed by a moving kinematic body stay awake.
+  for (const Contact& c : contacts_) {
+    for (const auto& [k, d] : {std::pair{c.body_a, c.body_b}, std::pair{c.body_b, c.body_a}}) {
+      const Body& kb = bodies_[k];
+      if (kb.type == BodyType::kinematic &&
+          (kb.rigid.linear_velocity.squaredNorm() > 0 || kb.rigid.angular_velocity.squaredNorm() > 0))
+        bodies_[d].sleep_time = -dt;  // becomes 0 below
+    }
+  }
+  std::vector<double> island_min(n, std::numeric_limits<double>::infinity());
+  for (Index i = 0; i < n; ++i) {
+    Body& b = bodies_[i];
+    if (b.type != BodyType::dynamic || !b.awake) continue;
+    const double speed = b.rigid.linear_velocity.norm() + b.rigid.angular_velocity.norm() * b.shape->radius;
+    if (!b.can_sleep || speed > settings_.sleep_velocity || b.sleep_time < 0)
+      b.sleep_time = 0;
+    else
+      b.sleep_time += dt;
+    const Index root = island_of_[i];
+    island_min[root] = std::min(island_min[root], b.sleep_time);
+  }
+  for (Index i = 0; i < n; ++i) {
+    Body& b = bodies_[i];
+    if (b.type != BodyType::dynamic || !b.awake) continue;
+    if (island_min[island_of_[i]] >= settings_.time_to_sleep) {
+      b.awake = false;
+      b.rigid.linear_velocity.setZero();
+      b.rigid.angular_velocity.setZero();
+    }
+  }
+}
+
+void World::step() {
+  stats_ = {};
+  const bool anything_moves = std::any_of(bodies_.begin(), bodies_.end(),
+                                          [](const Body& b) { return b.awake && b.type != BodyType::static_body; });
+  if (anything_moves) {
+    auto t0 = Clock::now();
+    find_pairs(pairs_);
+    stats_.body_pairs = static_cast<std::int64_t>(pairs_.size());
+    stats_.broad_phase_ms = ms_since(t0);
+    t0 = Clock::now();
+    narrow_phase(pairs_);
+    stats_.narrow_phase_ms = ms_since(t0);
+    t0 = Clock::now();
+    update_islands_and_wake();
+    solve();
+    update_sleep();
+    stats_.solver_ms = ms_since(t0);
+  }
+  ++step_count_;
+}
+
+double World::kinetic_energy() const {
+  double e = 0;
+  for (const Body& b : bodies_)
+    if (b.type == BodyType::dynamic) e += shatter::kinetic_energy(b.inertia, b.rigid);
+  return e;
+}
+
+WorldSnapshot World::save() const {
+  WorldSnapshot s;
+  s.bodies.reserve(bodies_.size());
+  for (const Body& b : bodies_) s.bodies.push_back({b.rigid, b.awake, b.sleep_time});
+  s.contacts = contacts_;
+  s.excluded = excluded_;
+  s.until_apart = until_apart_;
+  s.step_count = step_count_;
+  return s;
+}
+
+Result<void> World::restore(const WorldSnapshot& snapshot) {
+  if (snapshot.bodies.size() != bodies_.size())
+    return make_error("restore: the snapshot has " + std::to_string(snapshot.bodies.size()) + " bodies, the world " +
+                      std::to_string(bodies_.size()));
+  for (const Contact& c : snapshot.contacts)
+    if (c.body_a < 0 || c.body_b >= body_count() || c.body_a >= c.body_b)
+      return make_error("restore: the snapshot's contacts name bodies this world does not have");
+  for (std::size_t i = 0; i < bodies_.size(); ++i) {
+    bodies_[i].rigid = snapshot.bodies[i].rigid;
+    bodies_[i].awake = snapshot.bodies[i].awake;
+    bodies_[i].sleep_time = snapshot.bodies[i].sleep_time;
+  }
+  contacts_ = snapshot.contacts;
+  excluded_ = snapshot.excluded;
+  until_apart_ = snapshot.until_apart;
+  step_count_ = snapshot.step_count;
+  return {};
+}
+
+std::uint64_t World::state_hash() const {
+  Hasher h;
+  h.add(step_count_);
+  for (const Body& b : bodies_) {
+    const RigidState& r = b.rigid;
+    h.add(std::array<double, 13>{r.position.x(), r.position.y(), r.position.z(), r.orientation.w(), r.orientation.x(),
+                                 r.orientation.y(), r.orientation.z(), r.linear_velocity.x(), r.linear_velocity.y(),
+                                 r.linear_velocity.z(), r.angular_velocity.x(), r.angular_velocity.y(),
+                                 r.angular_velocity.z()});
+    h.add(static_cast<std::uint8_t>(b.awake));
+    h.add(b.sleep_time);
+  }
+  for (const Contact& c : contacts_) {
+    h.add(std::array<Index, 4>{c.body_a, c.body_b, c.piece_a, c.piece_b});
+    h.add(std::array<Index, 2>{c.sat.index_a, c.sat.index_b});
+    h.add(c.sat.kind);
+    const ContactConstraint& cc = c.constraint;
+    h.add(std::array<double, 3>{cc.normal.x(), cc.normal.y(), cc.normal.z()});
+    for (int i = 0; i < cc.count; ++i) {
+      const ContactPoint& p = cc.points[i];
+      h.add(p.feature);
+      h.add(std::array<double, 6>{p.position.x(), p.position.y(), p.position.z(), p.separation, p.normal_impulse,
+                                  p.total_normal_impulse});
+    }
+    h.add(std::array<double, 3>{cc.friction_impulse.x(), cc.friction_impulse.y(), cc.twist_impulse});
+  }
+  for (const auto& p : excluded_) h.add(p);
+  h.add(std::int64_t{-1});
+  for (const auto& p : until_apart_) h.add(p);
+  return h.digest();
+}
+
+}  // namespace shatter

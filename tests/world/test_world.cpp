@@ -1,0 +1,380 @@
+// The world's step on analytic and classic scenes: free flight, torque-free tumbling, bounces at
+// every impact phase, friction on an incline, resting stacks and their sleep, fast thin shards that
+// must not tunnel, and the state hash over runs, thread counts and save/restore.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "shatter/core/parallel.h"
+#include "shatter/fracture/fragments.h"
+#include "shatter/mesh/io/mesh_io.h"
+#include "world/world_scenes.h"
+
+namespace shatter {
+namespace {
+
+using scenes::add_dynamic;
+using scenes::add_ground;
+
+// Total mechanical energy (kinetic + potential above y = 0) of the dynamic bodies, J.
+double mechanical_energy(const World& w) {
+  double e = w.kinetic_energy();
+  for (BodyId i = 0; i < w.body_count(); ++i)
+    if (w.body_type(i) == BodyType::dynamic)
+      e += -w.settings().gravity.y() / w.inertia(i).inverse_mass * w.rigid_state(i).position.y();
+  return e;
+}
+
+TEST(World, FreeFlightFollowsTheDiscreteParabola) {
+  World w;
+  const BodyId b = add_dynamic(w, scenes::box_model(Vec3(0.1, 0.05, 0.02)), Vec3(0, 1, 0));
+  RigidState s = w.rigid_state(b);
+  s.linear_velocity = Vec3(2, 3, -1);
+  w.set_rigid_state(b, s);
+  const int n = 120;
+  for (int i = 0; i < n; ++i) w.step();
+  // Symplectic Euler over substeps of h: x = x0 + v0 t + g t^2 / 2 + g h t / 2.
+  const double t = n * w.settings().time_step;
+  const double h = w.settings().time_step / w.settings().substeps;
+  const Vec3 g = w.settings().gravity;
+  const Vec3 expected = Vec3(0, 1, 0) + Vec3(2, 3, -1) * t + 0.5 * g * t * t + 0.5 * g * h * t;
+  EXPECT_LT((w.rigid_state(b).position - expected).norm(), 1e-10);
+  EXPECT_LT((w.rigid_state(b).linear_velocity - (Vec3(2, 3, -1) + g * t)).norm(), 1e-10);
+  EXPECT_TRUE(w.contacts().empty());
+}
+
+TEST(World, TorqueFreeTumblingKeepsMomentumNeverGainsEnergyAndFlips) {
+  WorldSettings settings;
+  settings.gravity.setZero();
+  settings.enable_sleep = false;
+  World w(settings);
+  // A brick with principal moments about 1 : 2.4 : 2.9 (x, y, z); y is the intermediate axis.
+  const BodyId b = add_dynamic(w, scenes::box_model(Vec3(0.15, 0.05, 0.025), {}, {6, 2, 1}), Vec3::Zero());
+  RigidState s = w.rigid_state(b);
+  s.angular_velocity = Vec3(0.01, 6.0, 0.01);
+  w.set_rigid_state(b, s);
+  const Vec3 l0 = angular_momentum(w.inertia(b), w.rigid_state(b));
+  const double e0 = w.kinetic_energy();
+  double max_l_error = 0, max_gain = 0;
+  int flips = 0;
+  double previous = 1;
+  for (int i = 0; i < 600; ++i) {  // 10 s
+    w.step();
+    max_l_error = std::max(max_l_error, (angular_momentum(w.inertia(b), w.rigid_state(b)) - l0).norm() / l0.norm());
+    max_gain = std::max(max_gain, (w.kinetic_energy() - e0) / e0);
+    // The body's y axis in the world, against the momentum: flips sign at each Dzhanibekov turn.
+    const double along = (w.rigid_state(b).orientation * Vec3::UnitY()).dot(l0.normalized());
+    if (along * previous < 0 && std::abs(along) > 0.5) {
+      ++flips;
+      previous = along;
+    } else if (std::abs(along) > 0.5) {
+      previous = along;
+    }
+  }
+  EXPECT_LT(max_l_error, 1e-6);
+  EXPECT_LT(max_gain, 1e-9);
+  EXPECT_GE(flips, 2);
+}
+
+// Drop a ball of restitution e from height h above the ground (lowest point), return the ratio of
+// the first rebound apex to h.
+double bounce_ratio(double e, double drop, double* max_energy_gain) {
+  World w(scenes::settings(false));
+  add_ground(w, {.friction = 0.6, .restitution = e});
+  const double r = 0.1;
+  const BodyId b = add_dynamic(w, scenes::ball_model(r), Vec3(0, drop + r, 0), {.friction = 0.6, .restitution = e});
+  const double y0 = w.rigid_state(b).position.y();
+  double e_prev = mechanical_energy(w);
+  *max_energy_gain = 0;
+  bool bounced = false;
+  double apex = 0;
+  for (int i = 0; i < 600; ++i) {
+    w.step();
+    const double e_now = mechanical_energy(w);
+    *max_energy_gain = std::max(*max_energy_gain, e_now - e_prev);
+    e_prev = e_now;
+    const double vy = w.rigid_state(b).linear_velocity.y();
+    if (!bounced && vy > 0) bounced = true;
+    if (bounced) {
+      apex = std::max(apex, w.rigid_state(b).position.y());
+      if (vy < 0) break;
+    }
+  }
+  return (apex - r) / (y0 - r);
+}
+
+TEST(World, BallBouncesToRestitutionSquaredAtEveryImpactPhase) {
+  const double e = 0.6;
+  const double drop = 1.0;
+  // Impact speed sqrt(2 g h) moves the ball v dt per step: 16 drops offset by 1/16 of that put the
+  // impact at 16 phases within a step.
+  const double v = std::sqrt(2 * 9.81 * drop);
+  for (int k = 0; k < 16; ++k) {
+    double gain = 0;
+    const double ratio = bounce_ratio(e, drop + k / 16.0 * v / 60.0, &gain);
+    EXPECT_NEAR(ratio, e * e, 0.05 * e * e) << "phase " << k;
+    EXPECT_LE(gain, 1e-9) << "phase " << k;  // J; the ball holds ~23 J
+  }
+}
+
+// A box on a plane tilted by `degrees` about z, friction mu: displacement along the slope after t.
+double slide_on_incline(double degrees, double mu, double t) {
+  World w(scenes::settings(false));
+  const double a = degrees * std::numbers::pi / 180;
+  const Vec3 n(-std::sin(a), std::cos(a), 0);
+  w.add_plane({n, 0.0}, {.friction = mu});
+  const Vec3 half(0.1, 0.05, 0.1);
+  BodyDef def;
+  def.surface.friction = mu;
+  def.rigid.orientation = Quat(Eigen::AngleAxisd(a, Vec3::UnitZ()));
+  def.rigid.position = half.y() * n;
+  const BodyId b = *w.add_body(scenes::box_model(half), def);
+  const Vec3 x0 = w.rigid_state(b).position;
+  const int steps = static_cast<int>(std::lround(t / w.settings().time_step));
+  for (int i = 0; i < steps; ++i) w.step();
+  const Vec3 down_slope(-std::cos(a), -std::sin(a), 0);
+  return (w.rigid_state(b).position - x0).dot(down_slope);
+}
+
+TEST(World, BoxSticksBelowTheFrictionAngleAndSlidesAboveIt) {
+  const double mu = 0.5;  // friction angle 26.6 degrees
+  EXPECT_LT(std::abs(slide_on_incline(20, mu, 2.0)), 1e-3);
+  for (const double deg : {35.0, 45.0}) {
+    const double a = deg * std::numbers::pi / 180;
+    const double accel = 9.81 * (std::sin(a) - mu * std::cos(a));
+    const double t = 1.0;
+    EXPECT_NEAR(slide_on_incline(deg, mu, t), 0.5 * accel * t * t, 0.03 * 0.5 * accel * t * t) << deg;
+  }
+}
+
+// Largest displacement (m) and speed (m/s) of the bodies over `seconds`, from their poses at the
+// start of the call.
+void rest_scene(World& w, const std::vector<BodyId>& ids, double seconds, double* drift, double* speed) {
+  std::vector<Vec3> x0;
+  for (const BodyId i : ids) x0.push_back(w.rigid_state(i).position);
+  *drift = 0;
+  *speed = 0;
+  const int steps = static_cast<int>(std::lround(seconds / w.settings().time_step));
+  for (int s = 0; s < steps; ++s) {
+    w.step();
+    for (std::size_t k = 0; k < ids.size(); ++k) {
+      const RigidState& r = w.rigid_state(ids[k]);
+      *drift = std::max(*drift, (r.position - x0[k]).norm());
+      *speed = std::max(*speed, r.linear_velocity.norm());
+    }
+  }
+}
+
+// Placed exactly touching, the stacks first sink by the contact springs' sag under their own
+// weight (g / (2 pi 60 Hz)^2 = 0.07 mm per unit of load per contact: about 7 mm at the top of a
+// 10-box tower, docs/performance.md), within the first second; from then on they hold still.
+TEST(World, BoxTowerAndPyramidRestWithoutDriftOrJitter) {
+  struct Case {
+    const char* name;
+    int kind;        // 0 box, 1 tower of 10, 2 pyramid of 20 levels
+    double max_sag;  // m, while settling
+  };
+  for (const Case c : {Case{"box", 0, 2e-4}, Case{"tower", 1, 1e-2}, Case{"pyramid", 2, 1e-2}}) {
+    World w(scenes::settings(false));
+    add_ground(w);
+    std::vector<BodyId> ids = c.kind == 0   ? scenes::add_tower(w, 1, 0.5)
+                              : c.kind == 1 ? scenes::add_tower(w, 10, 0.5)
+                                            : scenes::add_pyramid(w, 20, 0.5);
+    double sag = 0, settle_speed = 0, drift = 0, speed = 0;
+    rest_scene(w, ids, 3.0, &sag, &settle_speed);
+    rest_scene(w, ids, 7.0, &drift, &speed);
+    EXPECT_LT(sag, c.max_sag) << c.name;
+    EXPECT_LT(drift, 1e-3) << c.name;
+    EXPECT_LT(speed, 1e-3) << c.name;
+  }
+}
+
+TEST(World, RestingStacksFallAsleepAndCostNothing) {
+  World w(scenes::settings(true));
+  add_ground(w);
+  const auto ids = scenes::add_pyramid(w, 10, 0.5);
+  for (int i = 0; i < 180; ++i) w.step();
+  for (const BodyId id : ids) EXPECT_FALSE(w.awake(id));
+  w.step();
+  EXPECT_EQ(w.stats().awake_bodies, 0);
+  EXPECT_EQ(w.stats().body_pairs, 0);  // nothing tested at all
+  // A push on the top box wakes its island, which settles and sleeps again.
+  w.apply_impulse(ids.back(), Vec3(0.01, 0, 0), w.rigid_state(ids.back()).position);
+  w.step();
+  EXPECT_GT(w.stats().awake_bodies, 1);
+}
+
+TEST(World, FastThinShardDoesNotTunnel) {
+  // A 1 cm shard (1 cm x 2 mm x 1 cm) thrown at 30 m/s at a 2 cm slab, then straight down at the ground.
+  for (const bool at_slab : {true, false}) {
+    World w(scenes::settings(false));
+    add_ground(w);
+    if (at_slab) {
+      BodyDef slab;
+      slab.type = BodyType::static_body;
+      slab.rigid.position = Vec3(0.5, 0.5, 0);
+      ASSERT_TRUE(w.add_box(Vec3(0.01, 0.5, 0.5), slab).ok());
+    }
+    BodyDef def;
+    def.rigid.position = at_slab ? Vec3(0, 0.5, 0) : Vec3(0, 0.6, 0);
+    def.rigid.linear_velocity = at_slab ? Vec3(30, 0, 0) : Vec3(0, -30, 0);
+    def.rigid.orientation = Quat(Eigen::AngleAxisd(0.3, Vec3(1, 2, 3).normalized()));
+    const BodyId s = *w.add_body(scenes::box_model(Vec3(0.005, 0.001, 0.005)), def);
+    // Depth of the shard's deepest node into the obstacle (m, > 0 inside).
+    const auto depth = [&] {
+      double d = -1e300;
+      for (const Vec3& x : world_positions(*w.model(s), w.rigid_state(s)))
+        d = std::max(d, at_slab ? x.x() - 0.49 : -x.y());
+      return d;
+    };
+    for (int i = 0; i < 120; ++i) {
+      w.step();
+      // Never through: the impact may press a corner in by less than the shard's 2 mm thickness,
+      // and the centre of mass never crosses the surface.
+      ASSERT_LT(depth(), 2e-3) << "step " << i;
+      ASSERT_TRUE(at_slab ? w.rigid_state(s).position.x() < 0.49 : w.rigid_state(s).position.y() > 0) << i;
+    }
+    EXPECT_LT(depth(), 5e-4);  // pushed back out: at rest, or bounced off and falling away
+  }
+}
+
+std::uint64_t pile_hash(int threads, int steps, int restore_at) {
+  const int saved_threads = num_threads();
+  set_num_threads(threads);
+  World w(scenes::settings(true));
+  add_ground(w);
+  const auto pieces = scenes::random_pieces(40, 0.03, 0.12, 60, 7);
+  Random rng(11);
+  for (std::size_t i = 0; i < pieces.size(); ++i) {
+    BodyDef def;
+    def.rigid.position = Vec3(rng.uniform(-0.2, 0.2), 0.1 + 0.15 * static_cast<double>(i), rng.uniform(-0.2, 0.2));
+    def.rigid.orientation = Quat(Eigen::AngleAxisd(rng.uniform(0, 3), rng.uniform_vec3(-1, 1).normalized()));
+    (void)*w.add_body(pieces[i], def);
+  }
+  WorldSnapshot snap;
+  for (int i = 0; i < steps; ++i) {
+    if (i == restore_at) snap = w.save();
+    w.step();
+  }
+  if (restore_at >= 0) {
+    const std::uint64_t straight = w.state_hash();
+    EXPECT_TRUE(w.restore(snap).ok());
+    for (int i = restore_at; i < steps; ++i) w.step();
+    EXPECT_EQ(w.state_hash(), straight);
+  }
+  set_num_threads(saved_threads);
+  return w.state_hash();
+}
+
+TEST(World, StateHashIsTheSameAcrossRunsThreadCountsAndRestore) {
+  const int steps = 240;
+  const std::uint64_t h1 = pile_hash(1, steps, -1);
+  EXPECT_EQ(pile_hash(1, steps, -1), h1);
+  EXPECT_EQ(pile_hash(2, steps, -1), h1);
+  EXPECT_EQ(pile_hash(4, steps, -1), h1);
+  EXPECT_EQ(pile_hash(2, steps, 100), h1);
+}
+
+TEST(World, RestingBoxCarriesItsWeightInTheStepImpulse) {
+  World w(scenes::settings(false));
+  add_ground(w);
+  const auto ids = scenes::add_tower(w, 1, 0.5);
+  for (int i = 0; i < 60; ++i) w.step();
+  double total = 0;
+  for (const Contact& c : w.contacts())
+    for (int k = 0; k < c.constraint.count; ++k) total += c.constraint.points[k].total_normal_impulse;
+  const double weight_impulse = 9.81 / w.inertia(ids[0]).inverse_mass * w.settings().time_step;
+  EXPECT_NEAR(total, weight_impulse, 0.01 * weight_impulse);
+}
+
+TetMesh asset(const std::string& name) {
+  auto read = read_mesh(std::string(SHATTER_SOURCE_DIR) + "/assets/meshes/" + name + ".msh");
+  EXPECT_TRUE(read.ok());
+  return read->mesh;
+}
+
+// The largest connected piece of the tets of `mesh` whose centroids satisfy `keep`: a shard.
+template <class Keep>
+TetMesh shard_of(const TetMesh& mesh, Keep&& keep) {
+  TetMesh part;
+  part.positions = mesh.positions;
+  for (const TetIndices& t : mesh.tets) {
+    const Vec3 c = 0.25 * (mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]] + mesh.positions[t[3]]);
+    if (keep(c)) part.tets.push_back(t);
+  }
+  std::vector<Fragment> pieces = extract_fragments(part, 1.0);
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < pieces.size(); ++i)
+    if (pieces[i].mesh.tets.size() > pieces[best].mesh.tets.size()) best = i;
+  return pieces[best].mesh;
+}
+
+// Place a body so its lowest node is `gap` above y = `floor`, centred over (x, z).
+BodyId drop_mesh(World& w, const TetMesh& mesh, double x, double z, double floor, double gap) {
+  auto model = make_body_model(mesh, Material{});
+  EXPECT_TRUE(model.ok());
+  double lowest = 1e300;
+  for (const Vec3& p : model->mesh.positions) lowest = std::min(lowest, p.y());
+  BodyDef def;
+  def.rigid.position = Vec3(x, floor + gap - lowest, z);
+  auto id = w.add_body(std::make_shared<const BodyModel>(std::move(*model)), def);
+  EXPECT_TRUE(id.ok());
+  return *id;
+}
+
+TEST(World, NonConvexBodiesAndTheirShardsRestOnTheGroundAndOnEachOther) {
+  for (const ContactMode mode : {ContactMode::convex_pieces, ContactMode::tet_vertices}) {
+    WorldSettings settings = scenes::settings(false);
+    settings.contact_mode = mode;
+    World w(settings);
+    add_ground(w);
+    const TetMesh teddy = asset("teddy");
+    const TetMesh vase = asset("vase");
+    // Shards: a 60-degree sector of the vase's belly, and a slice of the teddy's head.
+    const TetMesh vase_shard = shard_of(vase, [](const Vec3& c) {
+      return c.y() > 0.08 && c.y() < 0.2 && std::atan2(c.z(), c.x()) > 0 && std::atan2(c.z(), c.x()) < 1.05;
+    });
+    const TetMesh teddy_shard = shard_of(teddy, [](const Vec3& c) { return c.y() > 0.25 && c.x() > 0; });
+    std::vector<BodyId> ids;
+    ids.push_back(drop_mesh(w, teddy, 0, 0, 0, 0.01));
+    ids.push_back(drop_mesh(w, vase, 0.5, 0, 0, 0.01));
+    ids.push_back(drop_mesh(w, vase_shard, -0.5, 0, 0, 0.01));
+    ids.push_back(drop_mesh(w, teddy_shard, 0.0, 0.5, 0, 0.01));
+    // A shard dropped onto another one.
+    ids.push_back(drop_mesh(w, vase_shard, -0.5, 0, 0.15, 0.02));
+    for (int i = 0; i < 180; ++i) w.step();  // 3 s to settle
+    std::vector<Vec3> settled;
+    for (const BodyId id : ids) settled.push_back(w.rigid_state(id).position);
+    double drift = 0, speed = 0, deepest = 0;
+    for (int i = 0; i < 120; ++i) {  // then 2 s at rest
+      w.step();
+      for (std::size_t k = 0; k < ids.size(); ++k) {
+        drift = std::max(drift, (w.rigid_state(ids[k]).position - settled[k]).norm());
+        speed = std::max(speed, w.rigid_state(ids[k]).linear_velocity.norm());
+      }
+      for (const Contact& c : w.contacts())
+        for (int k = 0; k < c.constraint.count; ++k) deepest = std::min(deepest, c.constraint.points[k].separation);
+    }
+    const char* name = mode == ContactMode::convex_pieces ? "convex pieces" : "tet vertices";
+    EXPECT_LT(drift, 1e-3) << name;
+    EXPECT_LT(speed, 5e-3) << name;
+    EXPECT_GT(deepest, -2e-3) << name;
+    for (const BodyId id : ids)
+      for (const Vec3& x : world_positions(*w.model(id), w.rigid_state(id))) ASSERT_GT(x.y(), -2e-3) << name;
+  }
+}
+
+TEST(World, BadInputGivesErrors) {
+  World w;
+  EXPECT_FALSE(w.add_body(nullptr, {}).ok());
+  EXPECT_FALSE(w.add_box(Vec3(1, -1, 1), {.type = BodyType::static_body}).ok());
+  EXPECT_FALSE(w.add_box(Vec3(1, 1, 1), {.type = BodyType::dynamic}).ok());
+  WorldSnapshot other;
+  other.bodies.resize(3);
+  EXPECT_FALSE(w.restore(other).ok());
+}
+
+}  // namespace
+}  // namespace shatter
