@@ -48,12 +48,21 @@
 #include "shatter/solve/linear_solvers.h"
 #include "shatter/solve/static_solver.h"
 
-// Bodies: one body's model (constant) and state (changing); rigid-body integration.
+// Bodies: one body's model (constant) and state (changing); rigid-body integration; the contact
+// solver.
 #include "shatter/rigid/body.h"
+#include "shatter/rigid/contact_solver.h"
 #include "shatter/rigid/integrate.h"
 
-// Collision detection: the broad phase.
+// Collision detection: the broad phase, convex hulls and pieces, contact manifolds, the tet mode.
 #include "shatter/collide/broad_phase.h"
+#include "shatter/collide/contact.h"
+#include "shatter/collide/convex_decomposition.h"
+#include "shatter/collide/convex_hull.h"
+#include "shatter/collide/tet_contact.h"
+
+// The world: bodies, contacts and the fixed step.
+#include "shatter/world/world.h"
 
 // Static analysis of a mesh under a load case, and its result files.
 #include "shatter/scene/static_analysis.h"
