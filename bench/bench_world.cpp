@@ -120,8 +120,8 @@ BENCHMARK(BM_WorldStep)->ArgName("scene")->DenseRange(0, 3)->Unit(benchmark::kMi
 
 #ifdef SHATTER_HAVE_BULLET
 // The same scene in Bullet: each body a btConvexHullShape of its piece hulls' vertices (the box
-// pieces are one hull each), a static plane, 4 substeps of 1/240 s per 1/60 s step, and 2 solver
-// iterations (shatter solves once and relaxes once per substep).
+// pieces are one hull each), a static plane, the world's substeps (8 of 1/480 s per 1/60 s step),
+// and 2 solver iterations per substep (shatter solves once and relaxes once per substep).
 struct BulletWorld {
   btDefaultCollisionConfiguration config;
   btCollisionDispatcher dispatcher{&config};
@@ -170,7 +170,10 @@ struct BulletWorld {
   ~BulletWorld() {
     for (auto& b : bodies) world.removeRigidBody(b.get());
   }
-  void step() { world.stepSimulation(1.0f / 60.0f, 4, 1.0f / 240.0f); }
+  void step() {
+    const int substeps = WorldSettings{}.substeps;
+    world.stepSimulation(1.0f / 60.0f, substeps, 1.0f / (60.0f * static_cast<float>(substeps)));
+  }
 };
 
 void BM_BulletStep(benchmark::State& state) {
