@@ -100,7 +100,7 @@ class Decomposer {
     };
     for (Index t : frontier_) visit(t);
     for (int k = 0; k < 4; ++k) visit(faces_.neighbor(e, k));
-    for (std::size_t q = 0; q < queue_tets_.size(); ++q)
+    for (std::size_t q = 0; q < queue_tets_.size(); ++q)  // NOLINT(modernize-loop-convert): grows while visited
       for (int k = 0; k < 4; ++k) visit(faces_.neighbor(queue_tets_[q], k));
     return volume;
   }
@@ -289,8 +289,6 @@ class Decomposer {
   const TetMesh& mesh_;
   const TetFaces& faces_;
   DecompositionOptions options_;
-  static constexpr double kSkin = 0.1;
-  double skin_ = 0;              // m
   std::vector<double> volume_;   // |volume| per tet
   std::vector<Vec3> centroid_;   // per tet
   std::vector<Index> piece_of_;  // cluster of each tet, -1 while unassigned

@@ -121,7 +121,7 @@ int orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   const Expansion cy = add(mul(ev[2], ew[0]), minus(mul(ev[0], ew[2])));
   const Expansion cz = add(mul(ev[0], ew[1]), minus(mul(ev[1], ew[0])));
   const Expansion e = add(add(mul(eu[0], cx), mul(eu[1], cy)), mul(eu[2], cz));
-  for (auto it = e.rbegin(); it != e.rend(); ++it)
+  for (auto it = e.rbegin(); it != e.rend(); ++it)  // NOLINT(modernize-loop-convert): most significant first
     if (*it != 0) return *it > 0 ? 1 : -1;
   return 0;
 }
@@ -340,11 +340,11 @@ Surface compact(const std::vector<Tri>& tris, std::span<const Vec3> p) {
   Surface s;
   for (std::size_t t = 0; t < tris.size(); ++t)
     if (tris[t].alive) map[t] = static_cast<Index>(s.v.size()), s.v.push_back(tris[t].v);
-  for (std::size_t t = 0; t < tris.size(); ++t) {
-    if (!tris[t].alive) continue;
-    const auto& a = tris[t].adj;
+  for (const Tri& tri : tris) {
+    if (!tri.alive) continue;
+    const auto& a = tri.adj;
     s.adj.push_back({map[a[0]], map[a[1]], map[a[2]]});
-    s.area.push_back(area_vector2(p[tris[t].v[0]], p[tris[t].v[1]], p[tris[t].v[2]]));
+    s.area.push_back(area_vector2(p[tri.v[0]], p[tri.v[1]], p[tri.v[2]]));
   }
   return s;
 }
@@ -483,8 +483,8 @@ bool extract_loops(const Surface& s, Clusters& clusters, Polygons& out, std::vec
 // returned; when there are none, the vertices are removed.
 std::vector<std::pair<Index, Index>> remove_edge_vertices(std::size_t num_points, Polygons& polys) {
   std::vector<Index> count(num_points, 0), other(num_points, -1);
-  for (std::size_t f = 0; f < polys.loops.size(); ++f)
-    for (Index q : polys.loops[f]) ++count[q];
+  for (const auto& loop : polys.loops)
+    for (Index q : loop) ++count[q];
   std::vector<std::pair<Index, Index>> merges;
   for (std::size_t f = 0; f < polys.loops.size(); ++f) {
     const auto& loop = polys.loops[f];
