@@ -87,6 +87,11 @@ struct WorldSettings {
   bool enable_sleep = true;
   double time_to_sleep = 0.5;    ///< s a whole island must stay slow before it sleeps
   double sleep_velocity = 0.01;  ///< m/s: |v| + |w| r below this counts as slow
+  /// Smallest number of body pairs for a parallel narrow phase, and of moving bodies for a
+  /// parallel integration: a parallel region only pays for a few hundred microseconds of work.
+  /// Results do not depend on them (nor on the thread count).
+  std::int64_t parallel_min_pairs = 512;
+  std::int64_t parallel_min_bodies = 2048;
 };
 
 /// A contact between two bodies (one manifold), with what the solver did in the last step.

@@ -340,7 +340,7 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
           }
         }
       },
-      512);  // a box pair costs about a microsecond: go parallel only with hundreds of pairs
+      settings_.parallel_min_pairs);
 
   // Gather in pair order, carry the impulses of matching features (warm start), and settle the
   // pairs waiting to come apart.
@@ -481,7 +481,7 @@ void World::solve() {
           const Index i = moving[k];
           if (bodies_[i].type == BodyType::dynamic) solver_bodies_[i].linear_velocity += dv_gravity;
         },
-        4096);
+        settings_.parallel_min_bodies);
     for (ContactConstraint* c : active) warm_start_contact(*c, solver_bodies_);
     for (ContactConstraint* c : active)
       solve_contact(*c, solver_bodies_, inverse_h, true, settings_.contact.max_push_velocity);
@@ -498,7 +498,7 @@ void World::solve() {
           s.position = b.rigid.position;
           s.rotation = b.rigid.orientation.toRotationMatrix();
         },
-        2048);  // half a microsecond per body: a parallel region pays only for thousands
+        settings_.parallel_min_bodies);
     for (ContactConstraint* c : active)
       solve_contact(*c, solver_bodies_, inverse_h, false, settings_.contact.max_push_velocity);
   }
