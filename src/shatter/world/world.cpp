@@ -547,8 +547,12 @@ void World::update_sleep() {
 
 void World::step() {
   stats_ = {};
-  const bool anything_moves = std::any_of(bodies_.begin(), bodies_.end(),
-                                          [](const Body& b) { return b.awake && b.type != BodyType::static_body; });
+  // Nothing to do while every dynamic body sleeps and no kinematic body moves.
+  const bool anything_moves = std::any_of(bodies_.begin(), bodies_.end(), [](const Body& b) {
+    if (b.type == BodyType::dynamic) return b.awake;
+    return b.type == BodyType::kinematic &&
+           (b.rigid.linear_velocity.squaredNorm() > 0 || b.rigid.angular_velocity.squaredNorm() > 0);
+  });
   if (anything_moves) {
     auto t0 = Clock::now();
     find_pairs(pairs_);
