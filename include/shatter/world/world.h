@@ -164,7 +164,8 @@ class World {
   void apply_impulse(BodyId id, const Vec3& impulse, const Vec3& point);
   /// Wake a body (its island follows at the next step).
   void wake(BodyId id);
-  /// World box of a body at its pose (infinite for planes).
+  /// A world box around the body at its pose: its body-frame box turned and boxed again, so not
+  /// tight for a turned body (infinite for planes).
   [[nodiscard]] Aabb bounds(BodyId id) const;
 
   // Pairs.
