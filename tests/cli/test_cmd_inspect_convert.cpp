@@ -86,6 +86,32 @@ TEST(CmdConvert, EveryFormatKeepsTheMeshAndIds) {
   }
 }
 
+TEST(CmdConvert, CompressedVtuBothWays) {
+  test::TempDir dir;
+  TetMesh m = make_box_mesh({.cells = {3, 2, 2}, .jitter = 0.1});
+  ASSERT_OK(write_mesh(dir.file("in.msh"), m));
+  auto r = test::run_command(
+      test::cli_path() + " convert -q --compress " + quoted(dir.file("in.msh")) + " " + quoted(dir.file("z.vtu")),
+      true);
+  ASSERT_EQ(r.status, 0) << r.output;
+  auto back = read_mesh(dir.file("z.vtu"));
+  ASSERT_OK(back);
+  EXPECT_EQ(back->format, "vtu binary zlib");
+  EXPECT_EQ(back->mesh.positions, m.positions);
+  EXPECT_EQ(back->mesh.tets, m.tets);
+  // A compressed VTU (here also the fixture VTK itself wrote: appended raw zlib) converts to any format.
+  r = test::run_command(test::cli_path() + " convert -q " + quoted(test::data_path("mesh/vtu/vtk_appended_raw.vtu")) +
+                            " " + quoted(dir.file("from_vtk.msh")),
+                        true);
+  ASSERT_EQ(r.status, 0) << r.output;
+  // --compress is for .vtu only: a usage error, nothing written.
+  r = test::run_command(
+      test::cli_path() + " convert --compress " + quoted(dir.file("in.msh")) + " " + quoted(dir.file("z.vtk")), true);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("--compress"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("z.vtk")));
+}
+
 TEST(CmdConvert, SurfaceOutputCarriesNodeIds) {
   test::TempDir dir;
   TetMesh m = make_box_mesh({.cells = {2, 2, 2}});
