@@ -63,6 +63,21 @@ TEST(CmdInspect, UnreadableFileExits3WithLocation) {
   EXPECT_NE(r.output.find("shatter: error:"), std::string::npos) << r.output;
 }
 
+// Only regular files are read: a named pipe would block forever, a device never ends.
+TEST(CmdInspect, RefusesWhatIsNotARegularFile) {
+  test::TempDir dir;
+  ASSERT_EQ(test::run_command("mkfifo " + quoted(dir.file("pipe.msh"))).status, 0);
+  std::filesystem::create_directory(dir.file("folder.vtu"));
+  std::filesystem::create_symlink("/dev/zero", dir.file("zero.vtk"));
+  for (const auto& [file, what] : std::vector<std::pair<std::string, std::string>>{
+           {"pipe.msh", "a named pipe"}, {"folder.vtu", "is a directory"}, {"zero.vtk", "a character device"}}) {
+    const auto r = test::run_command("timeout 20 " + test::cli_path() + " inspect " + quoted(dir.file(file)), true);
+    EXPECT_EQ(r.status, 3) << file << ": " << r.output;
+    EXPECT_NE(r.output.find(file), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(what), std::string::npos) << r.output;
+  }
+}
+
 TEST(CmdConvert, EveryFormatKeepsTheMeshAndIds) {
   test::TempDir dir;
   TetMesh m = make_box_mesh({.cells = {3, 2, 2}, .jitter = 0.1});

@@ -94,5 +94,26 @@ TEST(FileIo, ReadErrorsNameTheFile) {
   EXPECT_NE(r.error().to_string().find("/nonexistent/x.msh"), std::string::npos);
 }
 
+TEST(FileIo, ReadRefusesWhatIsNotARegularFile) {
+  test::TempDir dir;
+  ASSERT_EQ(test::run_command("mkfifo '" + dir.file("pipe") + "'").status, 0);
+  auto r = read_file(dir.file("pipe"));  // would block forever if opened
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("a named pipe"), std::string::npos) << r.error().to_string();
+  r = read_file("/dev/zero");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("a character device"), std::string::npos) << r.error().to_string();
+  r = read_file(dir.path().string());
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("directory"), std::string::npos) << r.error().to_string();
+}
+
+TEST(Parallel, ThreadCountIsClamped) {
+  set_num_threads(2'000'000'000);
+  EXPECT_EQ(num_threads(), kMaxThreads);
+  set_num_threads(-5);
+  EXPECT_EQ(num_threads(), 1);
+}
+
 }  // namespace
 }  // namespace shatter

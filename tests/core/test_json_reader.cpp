@@ -67,5 +67,23 @@ TEST(JsonReader, SyntaxErrorsNameTheLine) {
   EXPECT_EQ(r.error().message.rfind("invalid JSON: ", 0), 0u) << r.error().message;
 }
 
+TEST(JsonReader, NestingIsBoundedBeforeParsing) {
+  auto nested = [](int depth) {
+    std::string t;
+    for (int i = 0; i < depth; ++i) t += i % 2 ? "{\"a\": " : "[";
+    t += "1";
+    for (int i = depth - 1; i >= 0; --i) t += i % 2 ? "}" : "]";
+    return t;
+  };
+  EXPECT_TRUE(parse_json(nested(kMaxJsonDepth), kFile).ok());
+  auto r = parse_json(nested(kMaxJsonDepth + 1), kFile);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("nested deeper than 256"), std::string::npos) << r.error().to_string();
+  EXPECT_EQ(r.error().file, kFile);
+  // 100,000 levels: an error, not a stack overflow. Brackets inside strings do not count.
+  EXPECT_FALSE(parse_json(nested(100'000), kFile).ok());
+  EXPECT_TRUE(parse_json("{\"a\": \"[[[[\\\"[[[[\"}", kFile).ok());
+}
+
 }  // namespace
 }  // namespace shatter::json_input

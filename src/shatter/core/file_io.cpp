@@ -16,7 +16,18 @@ namespace fs = std::filesystem;
 
 Result<std::string> read_file(const std::string& path, std::uint64_t max_bytes) {
   std::error_code ec;
-  if (fs::is_directory(path, ec)) return file_error(path, "is a directory, expected a file");
+  // Only regular files: opening a named pipe blocks until someone writes to it, and a device
+  // (/dev/zero) never ends. Checked by status, which opens nothing.
+  const fs::file_status st = fs::status(path, ec);
+  if (fs::is_directory(st)) return file_error(path, "is a directory, expected a file");
+  if (fs::exists(st) && !fs::is_regular_file(st))
+    return file_error(path, std::string("is not a regular file (") +
+                                (fs::is_fifo(st)             ? "a named pipe"
+                                 : fs::is_character_file(st) ? "a character device"
+                                 : fs::is_block_file(st)     ? "a block device"
+                                 : fs::is_socket(st)         ? "a socket"
+                                                             : "an unknown kind of file") +
+                                "), expected a file");
   std::ifstream in(path, std::ios::binary);
   if (!in) return file_error(path, std::string("cannot open for reading: ") + std::strerror(errno));
   in.seekg(0, std::ios::end);

@@ -12,7 +12,8 @@
 
 namespace shatter {
 
-/// Read a whole file into memory. Errors name the file. Files larger than max_bytes are refused.
+/// Read a whole file into memory. Errors name the file. Files larger than max_bytes are refused,
+/// and so is anything but a regular file (a directory, named pipe or device), without opening it.
 Result<std::string> read_file(const std::string& path, std::uint64_t max_bytes = (1ULL << 34));
 
 /// Write `path` atomically: `write` fills a stream opened on a temporary in the same folder; if it

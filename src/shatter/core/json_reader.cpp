@@ -51,6 +51,31 @@ Error Where::error(std::string message) const {
 }
 
 Result<Json> parse_json(std::string_view text, const std::string& file) {
+  // Nesting bounded before parsing: the readers of shapes, cases and scenes walk the tree
+  // recursively, so a file of 10,000 nested objects must be an error, not a stack overflow.
+  {
+    int depth = 0;
+    bool in_string = false;
+    std::int64_t line = 1;
+    for (std::size_t i = 0; i < text.size(); ++i) {
+      const char c = text[i];
+      if (c == '\n') ++line;
+      if (in_string) {
+        if (c == '\\')
+          ++i;  // skip the escaped character (an escaped newline is invalid JSON anyway)
+        else if (c == '"')
+          in_string = false;
+      } else if (c == '"') {
+        in_string = true;
+      } else if (c == '{' || c == '[') {
+        if (++depth > kMaxJsonDepth)
+          return line_error(
+              file, line, "JSON nested deeper than " + std::to_string(kMaxJsonDepth) + " levels of objects and arrays");
+      } else if (c == '}' || c == ']') {
+        --depth;  // unbalanced brackets are the parser's to report
+      }
+    }
+  }
   try {
     return Json::parse(text.begin(), text.end());
   } catch (const Json::parse_error& e) {
