@@ -175,5 +175,27 @@ TEST(CmdConvert, BadInputsAndOutputs) {
   EXPECT_EQ(content, "old");
 }
 
+// TetGen's two files are replaced together: when the .ele cannot be written, the old .node stays
+// (a new .node beside an old .ele would be another mesh). The same through `mesh -o`.
+TEST(CmdConvert, TetgenPairReplacedTogether) {
+  test::TempDir dir;
+  ASSERT_OK(write_mesh(dir.file("in.msh"), make_box_mesh({.cells = {2, 2, 2}})));
+  std::ofstream(dir.file("out.node")) << "old node";
+  std::filesystem::create_directory(dir.file("out.ele"));
+  auto r = test::run_command(
+      test::cli_path() + " convert " + quoted(dir.file("in.msh")) + " " + quoted(dir.file("out.node")), true);
+  EXPECT_EQ(r.status, 4) << r.output;
+  EXPECT_NE(r.output.find("out.ele"), std::string::npos) << r.output;
+  std::ifstream in(dir.file("out.node"));
+  EXPECT_EQ(std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()), "old node");
+  r = test::run_command(
+      test::cli_path() + " mesh --primitive box --size 1 1 1 --tets 50 -o " + quoted(dir.file("out.node")), true);
+  EXPECT_EQ(r.status, 4) << r.output;
+  std::ifstream in2(dir.file("out.node"));
+  EXPECT_EQ(std::string((std::istreambuf_iterator<char>(in2)), std::istreambuf_iterator<char>()), "old node");
+  for (const auto& e : std::filesystem::directory_iterator(dir.file("")))
+    EXPECT_NE(e.path().filename().string().rfind(".shatter-", 0), 0u) << e.path();
+}
+
 }  // namespace
 }  // namespace shatter

@@ -2,6 +2,8 @@
 // each error must name), resolution against a mesh, and `shatter static` end to end.
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
@@ -385,6 +387,46 @@ TEST(StaticCli, OutputFailureExits4) {
   auto r =
       test::run_command(test::cli_path() + " static " + f.mesh_path + " --case " + good + " --out " + blocker, true);
   EXPECT_EQ(r.status, 4) << r.output;
+}
+
+// A run whose later output cannot be written replaces none of the earlier results: every file of
+// the previous run stays byte for byte, and no temporary is left behind.
+TEST(StaticCli, FailedRunKeepsEveryEarlierOutput) {
+  CliFixture f;
+  const std::string out = f.dir.file("out");
+  const std::string first = f.write_case("first.json", kCliCase);
+  ASSERT_EQ(
+      test::run_command(test::cli_path() + " static " + f.mesh_path + " --case " + first + " --out " + out).status, 0);
+  const std::filesystem::path dir(out);
+  std::map<std::string, std::string> before;
+  for (const char* name : {"displacements.csv", "elements.csv"}) before[name] = read_text(dir / name);
+  // A different load (so every file would change), and result.vtu's place taken by a folder.
+  std::string twice = kCliCase;
+  twice.replace(twice.find("-1.0e6"), 6, "-2.0e6");
+  const std::string second = f.write_case("second.json", twice);
+  std::filesystem::remove(dir / "result.vtu");
+  std::filesystem::create_directory(dir / "result.vtu");
+  for (const char* blocked : {"result.vtu", "elements.csv"}) {
+    SCOPED_TRACE(blocked);
+    if (std::string(blocked) == "elements.csv") {
+      // The same with the second output blocked (and the third free).
+      std::filesystem::remove(dir / "result.vtu");
+      std::filesystem::rename(dir / "elements.csv", dir / "kept.csv");
+      std::filesystem::create_directory(dir / "elements.csv");
+    }
+    auto r =
+        test::run_command(test::cli_path() + " static " + f.mesh_path + " --case " + second + " --out " + out, true);
+    EXPECT_EQ(r.status, 4) << r.output;
+    EXPECT_NE(r.output.find(blocked), std::string::npos) << r.output;
+    EXPECT_EQ(read_text(dir / "displacements.csv"), before["displacements.csv"]);
+    if (std::string(blocked) == "result.vtu") {
+      EXPECT_EQ(read_text(dir / "elements.csv"), before["elements.csv"]);
+    } else {
+      EXPECT_FALSE(std::filesystem::exists(dir / "result.vtu"));
+    }
+    for (const auto& e : std::filesystem::directory_iterator(dir))
+      EXPECT_NE(e.path().filename().string().rfind(".shatter-", 0), 0u) << e.path();
+  }
 }
 
 }  // namespace

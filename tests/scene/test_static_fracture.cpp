@@ -2,6 +2,8 @@
 // field), and the fragment, crack and rest-shape outputs end to end on the bundled examples.
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -239,6 +241,33 @@ TEST(StaticFractureCli, OtherFragmentFormats) {
   auto bad = run_static(kExamples + "glass_bar/bar.vtk", kExamples + "glass_bar/case.json", dir.file("o2"),
                         "--fracture --fragment-format obj", true);
   EXPECT_EQ(bad.status, 2) << bad.output;
+}
+
+// --fracture whose fragments.vtu cannot be written: the earlier fragment files all stay as they were
+// (none deleted, none replaced), and so do the earlier displacements.
+TEST(StaticFractureCli, FailedRunKeepsEveryEarlierFragment) {
+  test::TempDir dir;
+  const std::string out = dir.file("out");
+  const std::string mesh = kExamples + "glass_bar/bar.vtk";
+  ASSERT_EQ(run_static(mesh, kExamples + "glass_bar/case.json", out, "--fracture").status, 0);
+  const fs::path d(out);
+  std::map<std::string, std::string> before;
+  for (const char* name : {"fragment_0.vtu", "fragment_1.vtu", "displacements.csv", "cracks.csv"})
+    before[name] = read_text(d / name);
+  fs::remove(d / "fragments.vtu");
+  fs::create_directory(d / "fragments.vtu");
+  // Below strength: one fragment, so fragment_1.vtu would be removed by a run that succeeds.
+  const std::string whole = write_case(dir, "whole.json", glass_case(1000.0));
+  auto r = run_static(mesh, whole, out, "--fracture", true);
+  EXPECT_EQ(r.status, 4) << r.output;
+  EXPECT_NE(r.output.find("fragments.vtu"), std::string::npos) << r.output;
+  for (const auto& [name, text] : before) EXPECT_EQ(read_text(d / name), text) << name;
+  // The same run with the folder free replaces them all, and removes the stale fragment_1.
+  fs::remove(d / "fragments.vtu");
+  auto ok = run_static(mesh, whole, out, "--fracture", true);
+  ASSERT_EQ(ok.status, 0) << ok.output;
+  EXPECT_FALSE(fs::exists(d / "fragment_1.vtu"));
+  EXPECT_NE(read_text(d / "displacements.csv"), before["displacements.csv"]);
 }
 
 TEST(StaticFractureCli, BelowStrengthStaysWhole) {

@@ -64,7 +64,7 @@ struct ReadMeshOptions {
 /// Read any supported volume format.
 Result<MeshReadResult> read_mesh(const std::string& path, const ReadMeshOptions& options = {});
 /// Write any supported volume format by extension, atomically. For TetGen, `path` may end in
-/// .node or .ele; both files are written.
+/// .node or .ele; both files are written, and replaced together or not at all.
 Result<void> write_mesh(const std::string& path, const TetMesh& mesh, const MeshWriteOptions& options = {});
 
 // --- Per-format parsers (bytes in memory; `name` is used in error messages; not validated: read_mesh does that). ---
