@@ -54,6 +54,34 @@ TEST(CmdInspect, ListsEveryProblemAndExits3) {
   EXPECT_TRUE(names_tet) << r.output;
 }
 
+// Coordinates at the ends of the double range: the report names what a double cannot hold and
+// never prints nan; a mesh scaled by 1e100 has the same angles and aspect ratios as at 1.
+TEST(CmdInspect, HugeCoordinatesGiveNoNan) {
+  test::TempDir dir;
+  TetMesh m = make_box_mesh({.max = Vec3(4, 1, 1), .cells = {4, 1, 1}});
+  ASSERT_OK(write_mesh(dir.file("unit.vtu"), m));
+  TetMesh big = m, far = m;
+  for (Vec3& p : big.positions) p *= 1e100;
+  for (Vec3& p : far.positions) p = Vec3(p.x() / 2 - 1, p.y() - 0.5, p.z() - 0.5) * 1e308;  // x in [-1e308, 1e308]
+  ASSERT_OK(write_mesh(dir.file("big.vtu"), big));
+  ASSERT_OK(write_mesh(dir.file("far.vtu"), far));
+  const auto ju = nlohmann::json::parse(
+      test::run_command(test::cli_path() + " inspect --json " + quoted(dir.file("unit.vtu"))).output);
+  const auto rb = test::run_command(test::cli_path() + " inspect --json " + quoted(dir.file("big.vtu")));
+  EXPECT_EQ(rb.status, 0) << rb.output;
+  const auto jb = nlohmann::json::parse(rb.output);
+  EXPECT_FALSE(jb.contains("non_finite")) << rb.output;
+  EXPECT_NEAR(jb["aspect_ratio"]["max"].get<double>(), ju["aspect_ratio"]["max"].get<double>(), 1e-9);
+  EXPECT_NEAR(jb["dihedral_deg"]["min"].get<double>(), ju["dihedral_deg"]["min"].get<double>(), 1e-9);
+  EXPECT_NEAR(jb["volume"].get<double>(), 4e300, 1e288);
+  for (const char* flag : {"", " --json"}) {
+    const auto r = test::run_command(test::cli_path() + " inspect" + flag + " " + quoted(dir.file("far.vtu")));
+    EXPECT_EQ(r.output.find("nan"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("inf"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(*flag ? "\"non_finite\"" : "not finite"), std::string::npos) << r.output;
+  }
+}
+
 TEST(CmdInspect, UnreadableFileExits3WithLocation) {
   test::TempDir dir;
   std::ofstream(dir.file("trunc.msh")) << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 4 1 4\n";
