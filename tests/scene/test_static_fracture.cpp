@@ -270,6 +270,36 @@ TEST(StaticFractureCli, FailedRunKeepsEveryEarlierFragment) {
   EXPECT_NE(read_text(d / "displacements.csv"), before["displacements.csv"]);
 }
 
+// The glass bar moved to x = 1e7 m (map coordinates) under 1 N: its displacements are below the
+// spacing of the doubles there and the residual stalls near 1. That must end as "not converged"
+// (exit 1, nothing written), never as a converged wrong answer; at the origin the same case converges.
+TEST(StaticFractureCli, FarFromTheOriginIsNotAFalseSuccess) {
+  test::TempDir dir;
+  auto bar = read_mesh(kExamples + "glass_bar/bar.vtk");
+  ASSERT_OK(bar);
+  auto case_at = [&](double x0) {
+    const std::string p = std::to_string(x0), q = std::to_string(x0 + 0.2);
+    return R"({"material": "glass", "model": "linear", "anchors": [
+      {"plane": {"point": [)" +
+           p + R"(, 0, 0], "normal": [1, 0, 0]}, "components": "x"},
+      {"plane": {"point": [0, 0, 0], "normal": [0, 1, 0]}, "components": "y"},
+      {"plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}, "components": "z"}],
+      "loads": [{"plane": {"point": [)" +
+           q + R"(, 0, 0], "normal": [1, 0, 0]}, "total_force": [1, 0, 0]}]})";
+  };
+  TetMesh far = bar->mesh;
+  for (Vec3& v : far.positions) v.x() += 1e7;
+  ASSERT_OK(write_mesh(dir.file("far.vtu"), far));
+  const std::string out = dir.file("out");
+  auto r = run_static(dir.file("far.vtu"), write_case(dir, "far.json", case_at(1e7)), out, "", true);
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("round-off"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(fs::path(out) / "displacements.csv"));
+  auto ok =
+      run_static(kExamples + "glass_bar/bar.vtk", write_case(dir, "near.json", case_at(0)), dir.file("near"), "", true);
+  EXPECT_EQ(ok.status, 0) << ok.output;
+}
+
 TEST(StaticFractureCli, BelowStrengthStaysWhole) {
   test::TempDir dir;
   const std::string mesh_path = kExamples + "glass_bar/bar.vtk";
