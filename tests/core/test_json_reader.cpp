@@ -85,5 +85,22 @@ TEST(JsonReader, NestingIsBoundedBeforeParsing) {
   EXPECT_TRUE(parse_json("{\"a\": \"[[[[\\\"[[[[\"}", kFile).ok());
 }
 
+TEST(JsonReader, DuplicateKeysAndHugeNumbersAreErrors) {
+  auto r = parse_json(R"({"tets": 100, "tets": 200})", kFile);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("duplicate key tets"), std::string::npos) << r.error().to_string();
+  EXPECT_EQ(r.error().file, kFile);
+  r = parse_json(R"({"shape": {"children": [{"type": "a"}, {"type": "b", "radius": 1, "radius": 2}]}})", kFile);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("duplicate key shape.children[1].radius"), std::string::npos)
+      << r.error().to_string();
+  // The same key in different objects is fine.
+  EXPECT_TRUE(parse_json(R"({"a": {"x": 1}, "b": {"x": 2}, "c": [{"x": 1}, {"x": 2}]})", kFile).ok());
+  r = parse_json(R"({"radius": 1e400})", kFile);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().file, kFile);
+  EXPECT_EQ(r.error().message, "invalid JSON: number overflow parsing '1e400'") << r.error().to_string();
+}
+
 }  // namespace
 }  // namespace shatter::json_input

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <vector>
 
 namespace shatter::json_input {
 namespace {
@@ -76,8 +78,60 @@ Result<Json> parse_json(std::string_view text, const std::string& file) {
       }
     }
   }
+  // Duplicate keys are errors (nlohmann would silently keep the last value): each open object
+  // keeps the keys seen so far, and the path of the first repeat is kept for the message.
+  struct Frame {
+    bool object = false;
+    std::vector<std::string> keys;  // object: keys seen
+    std::string current;            // object: the key being read; array: "[i]" of the element
+    std::size_t count = 0;          // array: elements so far
+  };
+  std::vector<Frame> frames;
+  std::string duplicate;  // path of the first repeated key, "" if none
+  auto path = [&] {
+    std::string out;
+    for (const Frame& f : frames) {
+      if (f.current.empty()) continue;
+      if (f.object && !out.empty()) out += '.';
+      out += f.current;
+    }
+    return out;
+  };
+  auto element = [&] {  // a value or a container starts in an array: name its index
+    if (!frames.empty() && !frames.back().object)
+      frames.back().current = "[" + std::to_string(frames.back().count++) + "]";
+  };
+  const Json::parser_callback_t track = [&](int, Json::parse_event_t event, Json& parsed) {
+    switch (event) {
+      case Json::parse_event_t::object_start:
+      case Json::parse_event_t::array_start:
+        element();
+        frames.push_back(Frame{event == Json::parse_event_t::object_start, {}, {}, 0});
+        break;
+      case Json::parse_event_t::object_end:
+      case Json::parse_event_t::array_end:
+        if (!frames.empty()) frames.pop_back();
+        break;
+      case Json::parse_event_t::key:
+        if (!frames.empty() && parsed.is_string()) {
+          Frame& f = frames.back();
+          f.current = parsed.get<std::string>();
+          if (std::find(f.keys.begin(), f.keys.end(), f.current) != f.keys.end()) {
+            if (duplicate.empty()) duplicate = path();
+          } else {
+            f.keys.push_back(f.current);
+          }
+        }
+        break;
+      case Json::parse_event_t::value: element(); break;
+    }
+    return true;
+  };
   try {
-    return Json::parse(text.begin(), text.end());
+    Json doc = Json::parse(text.begin(), text.end(), track);
+    if (!duplicate.empty())
+      return file_error(file, "duplicate key " + duplicate + ": each key may appear once in an object");
+    return doc;
   } catch (const Json::parse_error& e) {
     // Turn the byte position into a line number.
     const std::size_t byte = std::min<std::size_t>(e.byte > 0 ? e.byte - 1 : 0, text.size());
@@ -88,7 +142,11 @@ Result<Json> parse_json(std::string_view text, const std::string& file) {
     if (colon != std::string::npos) what = what.substr(colon + 2);
     return line_error(file, line, "invalid JSON: " + what);
   } catch (const std::exception& e) {
-    return file_error(file, std::string("invalid JSON: ") + e.what());
+    // e.g. "[json.exception.out_of_range.406] number overflow parsing '1e400'": without the tag.
+    std::string what = e.what();
+    if (what.rfind("[json.exception.", 0) == 0 && what.find("] ") != std::string::npos)
+      what = what.substr(what.find("] ") + 2);
+    return file_error(file, "invalid JSON: " + what);
   }
 }
 
