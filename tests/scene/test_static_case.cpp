@@ -2,12 +2,11 @@
 // each error must name), resolution against a mesh, and `shatter static` end to end.
 #include <gtest/gtest.h>
 
-#include <map>
-
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 

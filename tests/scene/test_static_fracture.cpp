@@ -2,13 +2,12 @@
 // field), and the fragment, crack and rest-shape outputs end to end on the bundled examples.
 #include <gtest/gtest.h>
 
-#include <map>
-
 #include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 #include <string>
@@ -16,6 +15,7 @@
 
 #include "shatter/core/file_io.h"
 #include "shatter/fracture/fragments.h"
+#include "shatter/mesh/generate.h"
 #include "shatter/mesh/io/mesh_io.h"
 #include "shatter/scene/static_case.h"
 #include "support/test_support.h"
@@ -298,6 +298,28 @@ TEST(StaticFractureCli, FarFromTheOriginIsNotAFalseSuccess) {
   auto ok =
       run_static(kExamples + "glass_bar/bar.vtk", write_case(dir, "near.json", case_at(0)), dir.file("near"), "", true);
   EXPECT_EQ(ok.status, 0) << ok.output;
+}
+
+// A mesh of two separate pieces that nothing breaks: the summary says so with the fragment count
+// it then lists (it used to say "1 fragment" and list 2).
+TEST(StaticFractureCli, SeparatePiecesAreCountedNotCracked) {
+  test::TempDir dir;
+  TetMesh a = make_box_mesh({.max = Vec3(0.2, 0.02, 0.02), .cells = {5, 1, 1}});
+  const TetMesh b = make_box_mesh({.min = Vec3(0, 0.05, 0), .max = Vec3(0.2, 0.07, 0.02), .cells = {5, 1, 1}});
+  const Index offset = a.num_nodes();
+  a.positions.insert(a.positions.end(), b.positions.begin(), b.positions.end());
+  for (TetIndices t : b.tets) {
+    for (int k = 0; k < 4; ++k) t[k] += offset;
+    a.tets.push_back(t);
+  }
+  ASSERT_OK(write_mesh(dir.file("two.vtu"), a));
+  const std::string case_path = write_case(dir, "two.json", R"({"material": "glass", "model": "linear",
+      "anchors": [{"plane": {"point": [0, 0, 0], "normal": [1, 0, 0]}}],
+      "loads": [{"plane": {"point": [0.2, 0, 0], "normal": [1, 0, 0]}, "total_force": [10, 0, 0]}]})");
+  auto r = run_static(dir.file("two.vtu"), case_path, dir.file("out"), "--fracture", true);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("nothing breaks: no crack, 2 fragment(s)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("fragment 1"), std::string::npos) << r.output;
 }
 
 TEST(StaticFractureCli, BelowStrengthStaysWhole) {
