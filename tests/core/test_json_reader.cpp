@@ -102,5 +102,17 @@ TEST(JsonReader, DuplicateKeysAndHugeNumbersAreErrors) {
   EXPECT_EQ(r.error().message, "invalid JSON: number overflow parsing '1e400'") << r.error().to_string();
 }
 
+TEST(JsonReader, StringsWithNulAreRefused) {
+  const Json j = Json::parse(R"({"name": "bar\u0000x", "ok": "bar"})");
+  const Where root{&kFile, ""};
+  auto bad = read_string(j["name"], root.key("name"));
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().message.find("NUL"), std::string::npos) << bad.error().to_string();
+  EXPECT_EQ(bad.error().field, "name");
+  auto ok = read_string(j["ok"], root.key("ok"));
+  ASSERT_TRUE(ok.ok());
+  EXPECT_EQ(*ok, "bar");
+}
+
 }  // namespace
 }  // namespace shatter::json_input

@@ -9,6 +9,7 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "shatter/core/file_io.h"
 #include "shatter/mesh/generate.h"
@@ -390,6 +391,23 @@ TEST(StaticCli, OutputFailureExits4) {
 
 // A run whose later output cannot be written replaces none of the earlier results: every file of
 // the previous run stays byte for byte, and no temporary is left behind.
+// A NUL in a case or material name is refused with the field named; it used to cut the message
+// short, and a case name with one made a stray output folder before failing with exit 4.
+TEST(StaticCli, NulInANameIsABadInput) {
+  CliFixture f;
+  for (const auto& [text, field] : std::vector<std::pair<std::string, std::string>>{
+           {R"({"name": "bar\u0000x", "material": "steel", "anchors": [{"nodes": [1]}]})", "name"},
+           {R"({"material": "st\u0000eel", "anchors": [{"nodes": [1]}]})", "material"}}) {
+    const std::string case_path = f.write_case("nul.json", text);
+    auto r = test::run_command(
+        "cd " + f.dir.file("") + " && " + test::cli_path() + " static " + f.mesh_path + " --case " + case_path, true);
+    EXPECT_EQ(r.status, 3) << r.output;
+    EXPECT_NE(r.output.find(field + ": expected a string without NUL"), std::string::npos) << r.output;
+    for (const auto& e : std::filesystem::directory_iterator(f.dir.file("")))
+      EXPECT_EQ(e.path().filename().string().find("_out"), std::string::npos) << e.path();
+  }
+}
+
 TEST(StaticCli, FailedRunKeepsEveryEarlierOutput) {
   CliFixture f;
   const std::string out = f.dir.file("out");

@@ -266,7 +266,10 @@ Result<bool> read_bool(const Json& value, const Where& where) {
 
 Result<std::string> read_string(const Json& value, const Where& where) {
   if (!value.is_string()) return where.error("expected a string, got " + type_name(value));
-  return value.get<std::string>();
+  std::string s = value.get<std::string>();
+  // A NUL ("\u0000") would cut the name short in messages and in the file names made from it.
+  if (s.find('\0') != std::string::npos) return where.error("expected a string without NUL characters (\\u0000)");
+  return s;
 }
 
 Result<Vec2> read_vec2(const Json& value, const Where& where) {

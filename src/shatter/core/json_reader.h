@@ -77,6 +77,7 @@ Result<double> read_positive(const Json& value, const Where& where);
 Result<double> read_non_negative(const Json& value, const Where& where);
 Result<std::int64_t> read_integer(const Json& value, const Where& where);
 Result<bool> read_bool(const Json& value, const Where& where);
+/// A string without NUL characters (they would cut names short in messages and file names).
 Result<std::string> read_string(const Json& value, const Where& where);
 /// [x, y] of finite numbers.
 Result<Vec2> read_vec2(const Json& value, const Where& where);

@@ -183,7 +183,8 @@ Result<LoadSpec> read_load(const Json& value, const Where& where) {
 // "glass" | {"preset": "glass", "youngs_modulus": ...} | {"youngs_modulus": ..., ...}
 Result<Material> read_material(const Json& value, const Where& where) {
   if (value.is_string()) {
-    auto m = material_preset(value.get<std::string>());
+    SHATTER_TRY(name, json_input::read_string(value, where));
+    auto m = material_preset(*name);
     if (!m.ok()) return where.error(m.error().message);
     return std::move(*m);
   }
