@@ -151,7 +151,12 @@ int run_mesh(const MeshArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   auto meshed = mesh_shape(sdf, shape_def, name);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (!meshed) return report_error(meshed.error().to_string(), kExitBadInput);
+  if (!meshed) {
+    // Errors of the meshers (sizes, profiles, methods) come after the file was read: name it.
+    Error e = meshed.error();
+    if (e.file.empty()) e.file = !a.shape.empty() ? a.shape : a.surface;
+    return report_error(e.to_string(), kExitBadInput);
+  }
   const TetMesh* mesh = &meshed->mesh;
   const std::string used = to_string(meshed->method);
   const StuffingReport& report = meshed->stuffing;

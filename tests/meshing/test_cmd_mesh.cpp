@@ -138,6 +138,9 @@ TEST(CmdMesh, HostileSizesAreRefused) {
     auto r = test::run_command(cli + " mesh --shape " + ring + " " + c.args + " 2>&1");
     EXPECT_EQ(r.status, c.status) << c.args << ": " << r.output;
     EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << ": " << r.output;
+    if (c.status == 3) {
+      EXPECT_NE(r.output.find("ring.json"), std::string::npos) << c.args << ": " << r.output;  // the file is named
+    }
   }
   auto fine = test::run_command(cli + " mesh --shape " + ring + " --segments 64 --json");
   ASSERT_EQ(fine.status, 0) << fine.output;
