@@ -35,7 +35,7 @@ QualitySummary unit_scale_quality(const TetMesh& mesh, const Aabb& box) {
   TetMesh unit;
   unit.tets = mesh.tets;
   unit.positions.reserve(mesh.positions.size());
-  for (const Vec3& p : mesh.positions) unit.positions.push_back((0.5 * p - 0.5 * c) / (0.5 * half));
+  for (const Vec3& p : mesh.positions) unit.positions.emplace_back((0.5 * p - 0.5 * c) / (0.5 * half));
   QualitySummary q = mesh_quality(unit);
   const double s3 = half * half * half;  // may be inf: then so is the volume, and the report says so
   q.volume *= s3;

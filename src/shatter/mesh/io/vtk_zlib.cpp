@@ -77,8 +77,9 @@ Result<std::string> vtk_zlib_decompress(ByteCursor& b, int header_size, std::uin
               ? "is truncated or holds more than the " + std::to_string(size) + " bytes its header gives"
           : rc == Z_MEM_ERROR ? std::string("cannot be expanded: out of memory")
                               : std::string("is not a valid zlib stream");
-      return offset_error(b.error("").file, static_cast<std::int64_t>(block_at),
-                          what + ": compressed block " + std::to_string(k) + " " + why);
+      std::string message = what;
+      message += ": compressed block " + std::to_string(k) + " " + why;
+      return offset_error(b.error("").file, static_cast<std::int64_t>(block_at), message);
     }
   }
   return out;
