@@ -1,6 +1,7 @@
 // `shatter mesh`: report on stdout, mesh written, non-zero exit and a message on bad input.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -142,6 +143,20 @@ TEST(CmdMesh, HostileSizesAreRefused) {
       EXPECT_NE(r.output.find("ring.json"), std::string::npos) << c.args << ": " << r.output;  // the file is named
     }
   }
+  // A profile of more points than the mesher takes is named as such (not "not simple", not slow).
+  {
+    std::ofstream circle(dir.file("circle.json"));
+    circle << R"({"tets": 1000, "shape": {"type": "revolution", "profile": [)";
+    for (int i = 0; i < 30'000; ++i) {
+      const double t = 2 * 3.141592653589793 * i / 30'000.0;
+      circle << (i ? ", " : "") << "[" << 0.07 + 0.01 * std::cos(t) << ", " << 0.01 * std::sin(t) << "]";
+    }
+    circle << "]}}";
+  }
+  auto circle = test::run_command(cli + " mesh --shape " + dir.file("circle.json") + " 2>&1");
+  EXPECT_EQ(circle.status, 3) << circle.output;
+  EXPECT_NE(circle.output.find("the profile has 30000 points (limit 20000)"), std::string::npos) << circle.output;
+
   auto fine = test::run_command(cli + " mesh --shape " + ring + " --segments 64 --json");
   ASSERT_EQ(fine.status, 0) << fine.output;
   EXPECT_EQ(nlohmann::json::parse(fine.output)["segments"], 64);

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -77,19 +78,32 @@ SweepSize sweep_size(const std::vector<Vec2>& poly, double h, const RevolveDef& 
   return z;
 }
 
+// A count for messages: whole numbers as such, astronomically large ones in %g.
+std::string count_text(double v) {
+  if (v < 1e15) return std::to_string(std::llround(v));
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+
 // An error when a sweep of that size is beyond the limits of `def`, naming the limit.
-Result<void> check_sweep_size(const SweepSize& z, double h, const RevolveDef& def) {
+Result<void> check_sweep_size(const std::vector<Vec2>& profile, const SweepSize& z, double h, const RevolveDef& def) {
+  if (profile.size() > static_cast<std::size_t>(def.max_profile_points))
+    return field_error("profile", "the profile has " + std::to_string(profile.size()) + " points (limit " +
+                                      std::to_string(def.max_profile_points) + "): expected a simpler profile");
   auto fail = [&](const std::string& what) {
-    return field_error("edge_length", "edge length " + std::to_string(h) + " m gives " + what +
+    char hb[32];
+    std::snprintf(hb, sizeof hb, "%.6g", h);
+    return field_error("edge_length", std::string("edge length ") + hb + " m gives " + what +
                                           ": expected a larger edge length or fewer segments");
   };
   if (!(z.points <= static_cast<double>(def.max_profile_points)))
-    return fail("a profile of about " + std::to_string(z.points) + " points (limit " +
+    return fail("a profile of about " + count_text(z.points) + " points (limit " +
                 std::to_string(def.max_profile_points) + ")");
   if (!(z.segments <= kMaxRevolveSegments))
-    return fail(std::to_string(z.segments) + " segments (limit " + std::to_string(kMaxRevolveSegments) + ")");
+    return fail(count_text(z.segments) + " segments (limit " + std::to_string(kMaxRevolveSegments) + ")");
   if (!(z.tets <= static_cast<double>(def.max_tets)))
-    return fail("about " + std::to_string(z.tets) + " tets (limit " + std::to_string(def.max_tets) + ")");
+    return fail("about " + count_text(z.tets) + " tets (limit " + std::to_string(def.max_tets) + ")");
   return {};
 }
 
@@ -381,7 +395,7 @@ bool sweep_with_levels(const Sweep& s, const std::vector<int>& level, TetMesh& m
 }
 
 Result<Sweep> plan(const std::vector<Vec2>& profile, double h, const RevolveDef& def, bool levels) {
-  if (auto ok = check_sweep_size(sweep_size(profile, h, def), h, def); !ok) return std::move(ok.error());
+  if (auto ok = check_sweep_size(profile, sweep_size(profile, h, def), h, def); !ok) return std::move(ok.error());
   Sweep s;
   s.points = resample(profile, h);
   auto tris = triangulate_polygon(s.points);
@@ -544,7 +558,7 @@ Result<TetMesh> mesh_revolution(const Sdf& sdf, const RevolveDef& def, RevolveRe
       std::int64_t best = -1;
       for (double t = hi; t > hi * 1e-4; t *= 0.98) {
         // Finer than the limits allow: the best so far stands (or, if none, plan() says why).
-        if (best >= 0 && !check_sweep_size(sweep_size(shape->profile, t, def), t, def).ok()) break;
+        if (best >= 0 && !check_sweep_size(shape->profile, sweep_size(shape->profile, t, def), t, def).ok()) break;
         auto sw = plan(shape->profile, t, def, levels);
         if (!sw) return std::move(sw.error());
         const std::int64_t c = sw->tets();
