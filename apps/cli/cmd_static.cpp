@@ -49,6 +49,7 @@ int run_static(const StaticArgs& args) {
   // Solve (and crack).
   auto analysis = run_static_analysis(*scase, mesh, {.fracture = args.fracture});
   if (!analysis) return report_error(analysis.error().to_string(), kExitBadInput);
+  for (const std::string& w : analysis->resolved.warnings) std::fprintf(stderr, "shatter: warning: %s\n", w.c_str());
   const StaticReport& report = analysis->report;
   if (!report.converged)
     return report_error(

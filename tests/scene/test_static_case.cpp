@@ -212,6 +212,12 @@ TEST(StaticCase, ResolvesAnchorsAndLoads) {
   const StaticProblem p = make_static_problem(*c, *r);
   EXPECT_TRUE(p.gravity);
   EXPECT_EQ(p.anchors.size(), static_cast<std::size_t>(mesh.num_nodes()));
+  // Node 1 is held (node 2 is not) and z is held on the loaded end: half of the first load and all
+  // of the third are not applied, and each is named (the x load on the rollers is applied).
+  ASSERT_EQ(r->warnings.size(), 2u);
+  EXPECT_EQ(r->warnings[0].rfind("good.json: loads[0]: 50 % of the load falls on held components", 0), 0u)
+      << r->warnings[0];
+  EXPECT_EQ(r->warnings[1].rfind("good.json: loads[2]: all of the load", 0), 0u) << r->warnings[1];
 }
 
 TEST(StaticCase, ResolveErrorsNameTheField) {
@@ -406,6 +412,22 @@ TEST(StaticCli, NulInANameIsABadInput) {
     for (const auto& e : std::filesystem::directory_iterator(f.dir.file("")))
       EXPECT_EQ(e.path().filename().string().find("_out"), std::string::npos) << e.path();
   }
+}
+
+// A load on held nodes is not applied; the run says so instead of listing it silently.
+TEST(StaticCli, LoadOnHeldNodesIsNamed) {
+  CliFixture f;
+  const std::string case_path = f.write_case("held.json", R"({"material": "steel", "model": "linear",
+    "anchors": [{"plane": {"point": [0, 0, 0], "normal": [1, 0, 0]}}],
+    "loads": [{"box": {"min": [2, 0, 0], "max": [2, 1, 1]}, "total_force": [0, -1000, 0]},
+              {"plane": {"point": [0, 0, 0], "normal": [1, 0, 0]}, "total_force": [0, -5, 0]}]})");
+  auto r = test::run_command(
+      test::cli_path() + " static " + f.mesh_path + " --case " + case_path + " --out " + f.dir.file("out"), true);
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("shatter: warning: " + case_path + ": loads[1]: all of the load falls on held"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("loads[0]:"), std::string::npos) << r.output;
 }
 
 TEST(StaticCli, FailedRunKeepsEveryEarlierOutput) {
