@@ -6,6 +6,7 @@ if(SHATTER_USE_OPENMP)
   find_package(OpenMP REQUIRED COMPONENTS CXX)
 endif()
 find_package(nlohmann_json 3.10 REQUIRED)  # shape, case and scene files
+find_package(ZLIB REQUIRED)  # compressed VTU arrays (zlib1g-dev)
 if(SHATTER_BUILD_APPS OR SHATTER_BUILD_TESTS)
   find_package(CLI11 REQUIRED)
   find_package(fmt REQUIRED)

@@ -14,7 +14,7 @@ packages=(
   # layout and lint checks (scripts/format.sh, scripts/tidy.sh)
   clang-format-19 clang-tidy-19
   # core library
-  libeigen3-dev libxxhash-dev
+  libeigen3-dev libxxhash-dev zlib1g-dev
   # tools
   libcli11-dev nlohmann-json3-dev libfmt-dev libspdlog-dev
   # tests and benchmarks; independent references the tests compare against

@@ -13,6 +13,7 @@ namespace {
 struct ConvertArgs {
   std::string input, output;
   bool binary = false;
+  bool compress = false;
   bool quiet = false;
 };
 
@@ -23,6 +24,8 @@ int run_convert(const ConvertArgs& args) {
                             ": unknown output extension; expected .msh .vtk .vtu .mesh .inp .node .ele "
                             "(volume) or .obj .ply .stl (boundary surface)",
                         kExitUsage);
+  if (args.compress && mesh_format_from_path(args.output) != MeshFormat::vtu)
+    return report_error(args.output + ": --compress applies to .vtu output only", kExitUsage);
   auto read = read_mesh(args.input);
   if (!read) return report_error(read.error().to_string(), kExitBadInput);
   for (const std::string& s : read->skipped)
@@ -34,7 +37,7 @@ int run_convert(const ConvertArgs& args) {
     for (Index node : surface.vertex_node) options.vertex_ids.push_back(read->mesh.node_id(node));
     written = write_surface(args.output, surface, options);
   } else {
-    written = write_mesh(args.output, read->mesh, MeshWriteOptions{.binary = args.binary});
+    written = write_mesh(args.output, read->mesh, MeshWriteOptions{.binary = args.binary, .compress = args.compress});
   }
   if (!written) return report_error(written.error().to_string(), kExitOutput);
   if (!args.quiet)
@@ -48,6 +51,7 @@ RunFn setup_convert(CLI::App& sub) {
   sub.add_option("IN", args->input, "Input mesh")->required();
   sub.add_option("OUT", args->output, "Output file; format by extension")->required();
   sub.add_flag("--binary", args->binary, "Binary payload where the format has one (msh, vtk, vtu, ply, stl)");
+  sub.add_flag("--compress", args->compress, ".vtu: zlib-compressed arrays (vtkZLibDataCompressor; implies --binary)");
   sub.add_flag("-q,--quiet", args->quiet, "No message on success");
   return [args] { return run_convert(*args); };
 }

@@ -87,7 +87,16 @@ Result<Sdf> primitive(const MeshArgs& a) {
 int run_mesh(const MeshArgs& a) {
   const int sources = !a.shape.empty() + !a.primitive.empty() + !a.surface.empty();
   if (sources != 1) return report_error("give exactly one of --shape, --primitive, --surface", kExitUsage);
+  // Bounded before it reaches the threading runtime, which sizes per-thread state by the count.
+  if (a.threads < 0 || a.threads > kMaxThreads)
+    return report_error("--threads: expected 1 to " + std::to_string(kMaxThreads) + " (0: all hardware threads), got " +
+                            std::to_string(a.threads),
+                        kExitUsage);
   if (a.threads > 0) set_num_threads(a.threads);
+  // A bad output extension is a usage error found before the (possibly long) meshing.
+  if (!a.output.empty() && mesh_format_from_path(a.output) == MeshFormat::unknown)
+    return report_error(a.output + ": unknown output extension; expected .msh .vtu .vtk .mesh .inp .node .ele",
+                        kExitUsage);
 
   // The shape.
   Sdf sdf;
@@ -135,14 +144,19 @@ int run_mesh(const MeshArgs& a) {
 
   auto method = parse_mesh_method(a.method);
   if (!method) return report_error("--method: " + method.error().message, kExitUsage);
-  if (a.segments < 0 || (a.segments > 0 && a.segments < 3))
-    return report_error("--segments: expected at least 3", kExitUsage);
+  if (a.segments < 0 || (a.segments > 0 && a.segments < 3) || a.segments > kMaxRevolveSegments)
+    return report_error("--segments: expected 3 to " + std::to_string(kMaxRevolveSegments), kExitUsage);
   const MeshShapeDef shape_def{.stuffing = def, .method = *method, .segments = a.segments};
 
   const auto t0 = std::chrono::steady_clock::now();
   auto meshed = mesh_shape(sdf, shape_def, name);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (!meshed) return report_error(meshed.error().to_string(), kExitBadInput);
+  if (!meshed) {
+    // Errors of the meshers (sizes, profiles, methods) come after the file was read: name it.
+    Error e = meshed.error();
+    if (e.file.empty()) e.file = !a.shape.empty() ? a.shape : a.surface;
+    return report_error(e.to_string(), kExitBadInput);
+  }
   const TetMesh* mesh = &meshed->mesh;
   const std::string used = to_string(meshed->method);
   const StuffingReport& report = meshed->stuffing;

@@ -49,6 +49,7 @@ int run_static(const StaticArgs& args) {
   // Solve (and crack).
   auto analysis = run_static_analysis(*scase, mesh, {.fracture = args.fracture});
   if (!analysis) return report_error(analysis.error().to_string(), kExitBadInput);
+  for (const std::string& w : analysis->resolved.warnings) std::fprintf(stderr, "shatter: warning: %s\n", w.c_str());
   const StaticReport& report = analysis->report;
   if (!report.converged)
     return report_error(
@@ -188,8 +189,9 @@ int run_static(const StaticArgs& args) {
                      strength_ratio > 1 ? "it would crack there" : "no crack");
   s += fmt::format("max vM      {:.6g} Pa in element {}\n", results.max_von_mises, mesh.tet_id(maxvm));
   if (frac) {
+    // The fragment count is the result's own: a mesh of separate pieces has several without a crack.
     if (frac->events.empty())
-      s += "fracture    nothing breaks: no crack, 1 fragment\n";
+      s += fmt::format("fracture    nothing breaks: no crack, {} fragment(s)\n", frac->fragments.size());
     else
       s += fmt::format("fracture    {} crack(s), {} fragment(s)\n", frac->events.size(), frac->fragments.size());
     for (std::size_t k = 0; k < frac->events.size(); ++k) {

@@ -54,6 +54,34 @@ TEST(CmdInspect, ListsEveryProblemAndExits3) {
   EXPECT_TRUE(names_tet) << r.output;
 }
 
+// Coordinates at the ends of the double range: the report names what a double cannot hold and
+// never prints nan; a mesh scaled by 1e100 has the same angles and aspect ratios as at 1.
+TEST(CmdInspect, HugeCoordinatesGiveNoNan) {
+  test::TempDir dir;
+  TetMesh m = make_box_mesh({.max = Vec3(4, 1, 1), .cells = {4, 1, 1}});
+  ASSERT_OK(write_mesh(dir.file("unit.vtu"), m));
+  TetMesh big = m, far = m;
+  for (Vec3& p : big.positions) p *= 1e100;
+  for (Vec3& p : far.positions) p = Vec3(p.x() / 2 - 1, p.y() - 0.5, p.z() - 0.5) * 1e308;  // x in [-1e308, 1e308]
+  ASSERT_OK(write_mesh(dir.file("big.vtu"), big));
+  ASSERT_OK(write_mesh(dir.file("far.vtu"), far));
+  const auto ju = nlohmann::json::parse(
+      test::run_command(test::cli_path() + " inspect --json " + quoted(dir.file("unit.vtu"))).output);
+  const auto rb = test::run_command(test::cli_path() + " inspect --json " + quoted(dir.file("big.vtu")));
+  EXPECT_EQ(rb.status, 0) << rb.output;
+  const auto jb = nlohmann::json::parse(rb.output);
+  EXPECT_FALSE(jb.contains("non_finite")) << rb.output;
+  EXPECT_NEAR(jb["aspect_ratio"]["max"].get<double>(), ju["aspect_ratio"]["max"].get<double>(), 1e-9);
+  EXPECT_NEAR(jb["dihedral_deg"]["min"].get<double>(), ju["dihedral_deg"]["min"].get<double>(), 1e-9);
+  EXPECT_NEAR(jb["volume"].get<double>(), 4e300, 1e288);
+  for (const char* flag : {"", " --json"}) {
+    const auto r = test::run_command(test::cli_path() + " inspect" + flag + " " + quoted(dir.file("far.vtu")));
+    EXPECT_EQ(r.output.find("nan"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("inf"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(*flag ? "\"non_finite\"" : "not finite"), std::string::npos) << r.output;
+  }
+}
+
 TEST(CmdInspect, UnreadableFileExits3WithLocation) {
   test::TempDir dir;
   std::ofstream(dir.file("trunc.msh")) << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 4 1 4\n";
@@ -61,6 +89,21 @@ TEST(CmdInspect, UnreadableFileExits3WithLocation) {
   EXPECT_EQ(r.status, 3);
   EXPECT_NE(r.output.find("trunc.msh:"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("shatter: error:"), std::string::npos) << r.output;
+}
+
+// Only regular files are read: a named pipe would block forever, a device never ends.
+TEST(CmdInspect, RefusesWhatIsNotARegularFile) {
+  test::TempDir dir;
+  ASSERT_EQ(test::run_command("mkfifo " + quoted(dir.file("pipe.msh"))).status, 0);
+  std::filesystem::create_directory(dir.file("folder.vtu"));
+  std::filesystem::create_symlink("/dev/zero", dir.file("zero.vtk"));
+  for (const auto& [file, what] : std::vector<std::pair<std::string, std::string>>{
+           {"pipe.msh", "a named pipe"}, {"folder.vtu", "is a directory"}, {"zero.vtk", "a character device"}}) {
+    const auto r = test::run_command("timeout 20 " + test::cli_path() + " inspect " + quoted(dir.file(file)), true);
+    EXPECT_EQ(r.status, 3) << file << ": " << r.output;
+    EXPECT_NE(r.output.find(file), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(what), std::string::npos) << r.output;
+  }
 }
 
 TEST(CmdConvert, EveryFormatKeepsTheMeshAndIds) {
@@ -84,6 +127,32 @@ TEST(CmdConvert, EveryFormatKeepsTheMeshAndIds) {
       }
     }
   }
+}
+
+TEST(CmdConvert, CompressedVtuBothWays) {
+  test::TempDir dir;
+  TetMesh m = make_box_mesh({.cells = {3, 2, 2}, .jitter = 0.1});
+  ASSERT_OK(write_mesh(dir.file("in.msh"), m));
+  auto r = test::run_command(
+      test::cli_path() + " convert -q --compress " + quoted(dir.file("in.msh")) + " " + quoted(dir.file("z.vtu")),
+      true);
+  ASSERT_EQ(r.status, 0) << r.output;
+  auto back = read_mesh(dir.file("z.vtu"));
+  ASSERT_OK(back);
+  EXPECT_EQ(back->format, "vtu binary zlib");
+  EXPECT_EQ(back->mesh.positions, m.positions);
+  EXPECT_EQ(back->mesh.tets, m.tets);
+  // A compressed VTU (here also the fixture VTK itself wrote: appended raw zlib) converts to any format.
+  r = test::run_command(test::cli_path() + " convert -q " + quoted(test::data_path("mesh/vtu/vtk_appended_raw.vtu")) +
+                            " " + quoted(dir.file("from_vtk.msh")),
+                        true);
+  ASSERT_EQ(r.status, 0) << r.output;
+  // --compress is for .vtu only: a usage error, nothing written.
+  r = test::run_command(
+      test::cli_path() + " convert --compress " + quoted(dir.file("in.msh")) + " " + quoted(dir.file("z.vtk")), true);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("--compress"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("z.vtk")));
 }
 
 TEST(CmdConvert, SurfaceOutputCarriesNodeIds) {
@@ -132,6 +201,28 @@ TEST(CmdConvert, BadInputsAndOutputs) {
   std::ifstream in(dir.file("keep.msh"));
   std::string content((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_EQ(content, "old");
+}
+
+// TetGen's two files are replaced together: when the .ele cannot be written, the old .node stays
+// (a new .node beside an old .ele would be another mesh). The same through `mesh -o`.
+TEST(CmdConvert, TetgenPairReplacedTogether) {
+  test::TempDir dir;
+  ASSERT_OK(write_mesh(dir.file("in.msh"), make_box_mesh({.cells = {2, 2, 2}})));
+  std::ofstream(dir.file("out.node")) << "old node";
+  std::filesystem::create_directory(dir.file("out.ele"));
+  auto r = test::run_command(
+      test::cli_path() + " convert " + quoted(dir.file("in.msh")) + " " + quoted(dir.file("out.node")), true);
+  EXPECT_EQ(r.status, 4) << r.output;
+  EXPECT_NE(r.output.find("out.ele"), std::string::npos) << r.output;
+  std::ifstream in(dir.file("out.node"));
+  EXPECT_EQ(std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>()), "old node");
+  r = test::run_command(
+      test::cli_path() + " mesh --primitive box --size 1 1 1 --tets 50 -o " + quoted(dir.file("out.node")), true);
+  EXPECT_EQ(r.status, 4) << r.output;
+  std::ifstream in2(dir.file("out.node"));
+  EXPECT_EQ(std::string((std::istreambuf_iterator<char>(in2)), std::istreambuf_iterator<char>()), "old node");
+  for (const auto& e : std::filesystem::directory_iterator(dir.file("")))
+    EXPECT_NE(e.path().filename().string().rfind(".shatter-", 0), 0u) << e.path();
 }
 
 }  // namespace

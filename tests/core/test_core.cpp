@@ -94,5 +94,87 @@ TEST(FileIo, ReadErrorsNameTheFile) {
   EXPECT_NE(r.error().to_string().find("/nonexistent/x.msh"), std::string::npos);
 }
 
+TEST(FileIo, ReadRefusesWhatIsNotARegularFile) {
+  test::TempDir dir;
+  ASSERT_EQ(test::run_command("mkfifo '" + dir.file("pipe") + "'").status, 0);
+  auto r = read_file(dir.file("pipe"));  // would block forever if opened
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("a named pipe"), std::string::npos) << r.error().to_string();
+  r = read_file("/dev/zero");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("a character device"), std::string::npos) << r.error().to_string();
+  r = read_file(dir.path().string());
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("directory"), std::string::npos) << r.error().to_string();
+}
+
+TEST(FileIo, AtomicWriteOfAVeryLongName) {
+  test::TempDir dir;
+  const std::string path = dir.file(std::string(250, 'a') + ".csv");  // 254 bytes: the temporary must be shorter
+  ASSERT_OK(write_file_atomic(path, "x"));
+  auto content = read_file(path);
+  ASSERT_OK(content);
+  EXPECT_EQ(*content, "x");
+}
+
+std::string text_of(const std::string& path) {
+  auto r = read_file(path);
+  return r.ok() ? *r : "<" + r.error().message + ">";
+}
+
+int entries(const test::TempDir& dir) {
+  int n = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir.path())) ++n;
+  return n;
+}
+
+TEST(OutputBatch, AllOrNothing) {
+  test::TempDir dir;
+  const std::string a = dir.file("a.txt"), b = dir.file("b.txt"), c = dir.file("c.txt");
+  ASSERT_OK(write_file_atomic(a, "a1"));
+  ASSERT_OK(write_file_atomic(b, "b1"));
+  ASSERT_OK(write_file_atomic(c, "stale"));
+  {
+    // The second output fails: the first is not replaced either, nothing is left behind.
+    OutputBatch batch;
+    ASSERT_OK(write_file_atomic(a, "a2"));
+    EXPECT_EQ(text_of(a), "a1");  // staged, not yet in place
+    EXPECT_FALSE(write_file_atomic(b, [](std::ostream&) -> Result<void> { return make_error("disk full"); }).ok());
+    batch.remove_on_commit(c);
+  }
+  EXPECT_EQ(text_of(a), "a1");
+  EXPECT_EQ(text_of(b), "b1");
+  EXPECT_EQ(text_of(c), "stale");
+  EXPECT_EQ(entries(dir), 3);
+  {
+    // All written: all replaced at commit; a nested batch joins the outer one; a stale file goes.
+    OutputBatch batch;
+    ASSERT_OK(write_file_atomic(a, "a2"));
+    {
+      OutputBatch inner;
+      ASSERT_OK(write_file_atomic(b, "b2"));
+      ASSERT_OK(inner.commit());
+    }
+    EXPECT_EQ(text_of(b), "b1");            // the inner commit leaves the renames to the outer batch
+    ASSERT_OK(write_file_atomic(a, "a3"));  // the same target again: the later content wins
+    batch.remove_on_commit(c);
+    ASSERT_OK(batch.commit());
+  }
+  EXPECT_EQ(text_of(a), "a3");
+  EXPECT_EQ(text_of(b), "b2");
+  EXPECT_FALSE(std::filesystem::exists(c));
+  EXPECT_EQ(entries(dir), 2);
+  // Outside a batch, writes land at once again.
+  ASSERT_OK(write_file_atomic(a, "a4"));
+  EXPECT_EQ(text_of(a), "a4");
+}
+
+TEST(Parallel, ThreadCountIsClamped) {
+  set_num_threads(2'000'000'000);
+  EXPECT_EQ(num_threads(), kMaxThreads);
+  set_num_threads(-5);
+  EXPECT_EQ(num_threads(), 1);
+}
+
 }  // namespace
 }  // namespace shatter

@@ -67,5 +67,52 @@ TEST(JsonReader, SyntaxErrorsNameTheLine) {
   EXPECT_EQ(r.error().message.rfind("invalid JSON: ", 0), 0u) << r.error().message;
 }
 
+TEST(JsonReader, NestingIsBoundedBeforeParsing) {
+  auto nested = [](int depth) {
+    std::string t;
+    for (int i = 0; i < depth; ++i) t += i % 2 ? "{\"a\": " : "[";
+    t += "1";
+    for (int i = depth - 1; i >= 0; --i) t += i % 2 ? "}" : "]";
+    return t;
+  };
+  EXPECT_TRUE(parse_json(nested(kMaxJsonDepth), kFile).ok());
+  auto r = parse_json(nested(kMaxJsonDepth + 1), kFile);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("nested deeper than 256"), std::string::npos) << r.error().to_string();
+  EXPECT_EQ(r.error().file, kFile);
+  // 100,000 levels: an error, not a stack overflow. Brackets inside strings do not count.
+  EXPECT_FALSE(parse_json(nested(100'000), kFile).ok());
+  EXPECT_TRUE(parse_json("{\"a\": \"[[[[\\\"[[[[\"}", kFile).ok());
+}
+
+TEST(JsonReader, DuplicateKeysAndHugeNumbersAreErrors) {
+  auto r = parse_json(R"({"tets": 100, "tets": 200})", kFile);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("duplicate key tets"), std::string::npos) << r.error().to_string();
+  EXPECT_EQ(r.error().file, kFile);
+  r = parse_json(R"({"shape": {"children": [{"type": "a"}, {"type": "b", "radius": 1, "radius": 2}]}})", kFile);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("duplicate key shape.children[1].radius"), std::string::npos)
+      << r.error().to_string();
+  // The same key in different objects is fine.
+  EXPECT_TRUE(parse_json(R"({"a": {"x": 1}, "b": {"x": 2}, "c": [{"x": 1}, {"x": 2}]})", kFile).ok());
+  r = parse_json(R"({"radius": 1e400})", kFile);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().file, kFile);
+  EXPECT_EQ(r.error().message, "invalid JSON: number overflow parsing '1e400'") << r.error().to_string();
+}
+
+TEST(JsonReader, StringsWithNulAreRefused) {
+  const Json j = Json::parse(R"({"name": "bar\u0000x", "ok": "bar"})");
+  const Where root{&kFile, ""};
+  auto bad = read_string(j["name"], root.key("name"));
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().message.find("NUL"), std::string::npos) << bad.error().to_string();
+  EXPECT_EQ(bad.error().field, "name");
+  auto ok = read_string(j["ok"], root.key("ok"));
+  ASSERT_TRUE(ok.ok());
+  EXPECT_EQ(*ok, "bar");
+}
+
 }  // namespace
 }  // namespace shatter::json_input

@@ -120,6 +120,34 @@ TEST(InpRead, Malformed) {
   expect_error(parse_inp(tet + "*NSET\n1\n", "t.inp"), "without NSET=", 8);
 }
 
+// Sets that each name the previous set twice, 40 levels deep (about 1 KB): 2^40 members unless
+// repeats are dropped as each set is read; they are, so the sets come out right and fast. A set
+// naming another set far more often than the mesh is large is refused.
+TEST(InpRead, SetExpansionIsBounded) {
+  const std::string tet = "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*ELEMENT, TYPE=C3D4\n1,1,2,3,4\n";
+  for (const char* kind : {"NSET", "ELSET"}) {
+    SCOPED_TRACE(kind);
+    std::string s = tet + "*" + kind + "," + kind + "=S0\n1\n";
+    for (int k = 1; k <= 40; ++k)
+      s += "*" + std::string(kind) + "," + kind + "=S" + std::to_string(k) + "\nS" + std::to_string(k - 1) + ", S" +
+           std::to_string(k - 1) + "\n";
+    ASSERT_LT(s.size(), 1200u);
+    auto r = parse_inp(s, "t.inp");
+    ASSERT_OK(r);
+    const auto& sets = std::string(kind) == "NSET" ? r->mesh.node_sets : r->mesh.tet_sets;
+    ASSERT_EQ(sets.count("S40"), 1u);
+    EXPECT_EQ(sets.at("S40"), std::vector<Index>{0});
+  }
+  // 300,000 references to a 4-node set: more than the bound (1,000,000 + 64 per node and element).
+  std::string many = tet + "*NSET,NSET=ALL\n1,2,3,4\n*NSET,NSET=B\n";
+  for (int k = 0; k < 300'000; ++k) many += k % 16 == 15 ? "ALL\n" : "ALL,";
+  many += "ALL\n";
+  auto r = parse_inp(many, "t.inp");
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("sets naming sets too many times"), std::string::npos) << r.error().to_string();
+  EXPECT_EQ(r.error().file, "t.inp");
+}
+
 TEST(InpWrite, RoundTripIsExact) {
   TetMesh m = make_box_mesh({.min = Vec3(-1, 0.1, 0), .max = Vec3(0.3, 1, 1e-3), .cells = {2, 2, 3}, .jitter = 0.25});
   m.node_ids.resize(m.positions.size());

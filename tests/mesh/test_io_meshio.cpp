@@ -45,10 +45,10 @@ struct Case {
   double tolerance;  // meshio writes ASCII VTU with 12 digits, MEDIT/INP/TetGen with 16-17
 };
 const Case kCases[] = {
-    {"gmsh22", "a22.msh", false, 0},   {"gmsh22", "b22.msh", true, 0},     {"gmsh", "a41.msh", false, 0},
-    {"gmsh", "b41.msh", true, 0},      {"vtk", "a.vtk", false, 0},         {"vtk", "b.vtk", true, 0},
-    {"vtu", "a.vtu", false, 1e-11},    {"vtu", "b.vtu", true, 0},          {"medit", "a.mesh", false, 1e-15},
-    {"abaqus", "a.inp", false, 1e-15}, {"tetgen", "a.node", false, 1e-15},
+    {"gmsh22", "a22.msh", false, 0},   {"gmsh22", "b22.msh", true, 0},    {"gmsh", "a41.msh", false, 0},
+    {"gmsh", "b41.msh", true, 0},      {"vtk", "a.vtk", false, 0},        {"vtk", "b.vtk", true, 0},
+    {"vtu", "a.vtu", false, 1e-11},    {"vtu", "b.vtu", true, 0},         {"vtu_default", "c.vtu", true, 0},
+    {"medit", "a.mesh", false, 1e-15}, {"abaqus", "a.inp", false, 1e-15}, {"tetgen", "a.node", false, 1e-15},
 };
 
 TEST(Meshio, WeReadWhatMeshioWrites) {
@@ -79,18 +79,24 @@ TEST(Meshio, MeshioReadsWhatWeWrite) {
   SHATTER_REQUIRE_TOOL(have_meshio(), "/usr/bin/python3 cannot import meshio");
   test::TempDir dir;
   const TetMesh m = sample_mesh();
-  for (const auto& [file, binary] : std::vector<std::pair<std::string, bool>>{{"a.msh", false},
-                                                                              {"b.msh", true},
-                                                                              {"a.vtk", false},
-                                                                              {"b.vtk", true},
-                                                                              {"a.vtu", false},
-                                                                              {"b.vtu", true},
-                                                                              {"a.mesh", false},
-                                                                              {"a.inp", false},
-                                                                              {"a.node", false}}) {
+  struct Written {
+    std::string file;
+    bool binary = false;
+    bool compress = false;
+  };
+  for (const auto& [file, binary, compress] : std::vector<Written>{{"a.msh", false},
+                                                                   {"b.msh", true},
+                                                                   {"a.vtk", false},
+                                                                   {"b.vtk", true},
+                                                                   {"a.vtu", false},
+                                                                   {"b.vtu", true},
+                                                                   {"c.vtu", true, true},
+                                                                   {"a.mesh", false},
+                                                                   {"a.inp", false},
+                                                                   {"a.node", false}}) {
     SCOPED_TRACE(file);
     const std::string path = dir.file(file);
-    ASSERT_OK(write_mesh(path, m, {.binary = binary}));
+    ASSERT_OK(write_mesh(path, m, {.binary = binary, .compress = compress}));
     const auto run = test::run_command(kPython + " " + script() + " read " + path);
     ASSERT_EQ(run.status, 0) << run.output;
     const auto j = nlohmann::json::parse(run.output, nullptr, false);

@@ -75,6 +75,27 @@ TEST(MshRoundTrip, UntaggedMeshWithDefaultIdsComesBackUnchanged) {
   }
 }
 
+// A binary 4.1 tag above the largest int64 (here 2^64 - 1) is refused with its value; it used to
+// wrap to the id -1.
+TEST(MshRead, BinaryTagAboveInt64IsRefused) {
+  TetMesh m = make_box_mesh({.cells = {1, 1, 1}});
+  for (Index i = 0; i < m.num_nodes(); ++i) m.node_ids.push_back(100 + 7 * FileId(i));
+  for (Index e = 0; e < m.num_tets(); ++e) m.tet_ids.push_back(500 + 3 * FileId(e));
+  const std::string bytes = write_to_string(m, true);
+  for (const FileId id : {FileId{107}, FileId{503}}) {  // neither the smallest nor the largest tag
+    std::string s = bytes;
+    char le[8];
+    std::memcpy(le, &id, 8);
+    const std::size_t at = s.find(std::string(le, 8));
+    ASSERT_NE(at, std::string::npos);
+    std::memset(s.data() + at, 0xFF, 8);
+    const Result<MeshReadResult> r = parse_msh(s, "big.msh");
+    ASSERT_FALSE(r.ok()) << id;
+    EXPECT_NE(r.error().message.find("tag 18446744073709551615 is larger than the largest id"), std::string::npos)
+        << r.error().to_string();
+  }
+}
+
 TEST(MshWrite, RejectsNonPositiveIds) {
   TetMesh m = sample_mesh();
   m.node_ids[3] = 0;

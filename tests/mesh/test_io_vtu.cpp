@@ -2,7 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <bit>
+#include <cstdlib>
 #include <cstring>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "shatter/core/file_io.h"
@@ -28,10 +30,11 @@ TetMesh vtu_sample_mesh() {
   return m;
 }
 
-std::string vtu_string(const TetMesh& m, bool binary, const MeshFields& fields = {}) {
+std::string vtu_string(const TetMesh& m, bool binary, const MeshFields& fields = {}, bool compress = false) {
   std::ostringstream s;
   MeshWriteOptions o;
   o.binary = binary;
+  o.compress = compress;
   o.fields = fields;
   const Result<void> r = write_vtu(s, m, o);
   EXPECT_TRUE(r.ok()) << r.error().to_string();
@@ -161,9 +164,9 @@ TEST(VtuRead, MalformedInputs) {
       {"not xml", "hello", "text outside the root"},
       {"wrong root", "<Foo/>", "<VTKFile>"},
       {"wrong type", "<VTKFile type=\"PolyData\"/>", "UnstructuredGrid"},
-      {"compressed", replaced("header_type=\"UInt64\"", "header_type=\"UInt64\" compressor=\"vtkZLibDataCompressor\""),
-       "compressed VTU not supported"},
-      {"appended", ascii + "<AppendedData encoding=\"raw\">_\x01\x02</AppendedData>", "AppendedData"},
+      {"lz4", replaced("header_type=\"UInt64\"", "header_type=\"UInt64\" compressor=\"vtkLZ4DataCompressor\""),
+       "only vtkZLibDataCompressor"},
+      {"appended after the root", ascii + "<AppendedData encoding=\"raw\">_\x01\x02</AppendedData>", "</VTKFile>"},
       {"unterminated", ascii.substr(0, ascii.size() / 2), "file ends inside"},
       {"mismatched", replaced("</Points>", "</Cells>"), "does not match"},
       {"doctype", "<!DOCTYPE x [<!ENTITY a \"b\">]><VTKFile/>", "DOCTYPE"},
@@ -215,6 +218,188 @@ TEST(VtuRead, BinaryCorruptions) {
   ASSERT_FALSE(r.ok());
   // Every truncation fails cleanly.
   for (std::size_t n = 0; n < bin.size(); n += 13) EXPECT_FALSE(parse_vtu(bin.substr(0, n), "t.vtu").ok()) << n;
+}
+
+/// The mesh of tests/data/mesh/vtu/expected.json (points as shortest round-trip text).
+struct ExpectedMesh {
+  std::vector<Vec3> points;
+  std::vector<TetIndices> tets;
+};
+
+ExpectedMesh fixture_mesh() {
+  ExpectedMesh m;
+  const Result<std::string> text = read_file(test::data_path("mesh/vtu/expected.json"));
+  EXPECT_TRUE(text.ok());
+  if (!text.ok()) return m;
+  const nlohmann::json j = nlohmann::json::parse(*text);
+  for (const auto& p : j.at("points")) {
+    Vec3 v;
+    for (int k = 0; k < 3; ++k) v[k] = std::strtod(p.at(k).get<std::string>().c_str(), nullptr);
+    m.points.push_back(v);
+  }
+  for (const auto& t : j.at("tets"))
+    m.tets.push_back({t[0].get<Index>(), t[1].get<Index>(), t[2].get<Index>(), t[3].get<Index>()});
+  return m;
+}
+
+void expect_bitwise(const TetMesh& got, const std::vector<Vec3>& points, const std::vector<TetIndices>& tets) {
+  ASSERT_EQ(got.positions.size(), points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_EQ(std::bit_cast<std::uint64_t>(got.positions[i][k]), std::bit_cast<std::uint64_t>(points[i][k]))
+          << "point " << i << " component " << k;
+  EXPECT_EQ(got.tets, tets);
+}
+
+struct Fixture {
+  const char* file;
+  const char* format;
+};
+// Written by tests/data/mesh/vtu/make_fixtures.py with meshio 7 and VTK 9.1 (Debian 12).
+const Fixture kFixtures[] = {
+    {"meshio_default.vtu", "vtu binary zlib"},         {"meshio_uint64.vtu", "vtu binary zlib"},
+    {"meshio_uncompressed.vtu", "vtu binary"},         {"vtk_default.vtu", "vtu appended base64 zlib"},
+    {"vtk_appended_raw.vtu", "vtu appended raw zlib"}, {"vtk_inline_binary.vtu", "vtu binary zlib"},
+    {"vtk_appended_plain.vtu", "vtu appended raw"},    {"vtk_small_blocks.vtu", "vtu appended raw zlib"},
+};
+
+std::string fixture_bytes(const char* file) {
+  const Result<std::string> bytes = read_file(test::data_path(std::string("mesh/vtu/") + file));
+  EXPECT_TRUE(bytes.ok()) << file;
+  return bytes.ok() ? *bytes : std::string();
+}
+
+TEST(VtuRead, MeshioAndVtkFilesReadBackExactly) {
+  const ExpectedMesh expected = fixture_mesh();
+  ASSERT_EQ(expected.points.size(), 36u);
+  ASSERT_EQ(expected.tets.size(), 72u);
+  for (const Fixture& f : kFixtures) {
+    SCOPED_TRACE(f.file);
+    const Result<MeshReadResult> r = parse_vtu(fixture_bytes(f.file), f.file);
+    ASSERT_TRUE(r.ok()) << r.error().to_string();
+    EXPECT_EQ(r->format, f.format);
+    expect_bitwise(r->mesh, expected.points, expected.tets);
+    EXPECT_TRUE(r->skipped.empty());
+  }
+  // Through read_mesh too (validated: every tet is positively oriented, nothing repaired).
+  const Result<MeshReadResult> r = read_mesh(test::data_path("mesh/vtu/vtk_appended_raw.vtu"));
+  ASSERT_TRUE(r.ok()) << r.error().to_string();
+  expect_bitwise(r->mesh, expected.points, expected.tets);
+}
+
+TEST(VtuRoundTrip, CompressedWithFieldsAndManyBlocks) {
+  // 21^3 nodes: the points (222 KB) span several 32 KiB zlib blocks.
+  TetMesh big =
+      make_box_mesh({.min = Vec3(0, 0, 0), .max = Vec3(1, 2, 3), .cells = {20, 20, 20}, .jitter = 0.3, .seed = 9});
+  for (const TetMesh& m : {vtu_sample_mesh(), big}) {
+    MeshFields fields;
+    MeshField s{"s", 1, {}};
+    for (Index e = 0; e < m.num_tets(); ++e) s.values.push_back(0.1 * e);
+    fields.tet_fields = {s};
+    const std::string bytes = vtu_string(m, false, fields, true);
+    EXPECT_NE(bytes.find("compressor=\"vtkZLibDataCompressor\""), std::string::npos);
+    const Result<MeshReadResult> r = parse_vtu(bytes, "z.vtu");
+    ASSERT_TRUE(r.ok()) << r.error().to_string();
+    EXPECT_EQ(r->format, "vtu binary zlib");
+    expect_bitwise(r->mesh, m.positions, m.tets);
+    EXPECT_EQ(r->mesh.node_ids, m.node_ids);
+    EXPECT_EQ(r->mesh.tet_ids, m.tet_ids);
+    EXPECT_EQ(r->mesh.tet_tags, m.tet_tags);
+    EXPECT_EQ(vtu_string(r->mesh, false, fields, true), bytes);  // deterministic
+    if (m.num_nodes() > 5000) {
+      EXPECT_LT(bytes.size(), vtu_string(m, true, fields).size());
+    }
+  }
+}
+
+/// Every error names the file; none crashes. Returns the message.
+std::string expect_fails(const std::string& bytes, const std::string& label) {
+  const Result<MeshReadResult> r = parse_vtu(bytes, "bad.vtu");
+  EXPECT_FALSE(r.ok()) << label;
+  if (r.ok()) return {};
+  EXPECT_NE(r.error().to_string().find("bad.vtu"), std::string::npos) << label << ": " << r.error().to_string();
+  return r.error().to_string();
+}
+
+TEST(VtuRead, CorruptCompressedAndAppendedData) {
+  // Truncated anywhere: an error (never a crash), for every layout.
+  for (const Fixture& f : kFixtures) {
+    const std::string bytes = fixture_bytes(f.file);
+    for (std::size_t n = 0; n < bytes.size(); n += 7)
+      expect_fails(bytes.substr(0, n), std::string(f.file) + " cut at " + std::to_string(n));
+  }
+  // Any byte of the appended data changed: an error or (when it only changes a value) a mesh, never a crash.
+  for (const char* file : {"vtk_appended_raw.vtu", "vtk_default.vtu", "vtk_small_blocks.vtu", "meshio_default.vtu"}) {
+    const std::string bytes = fixture_bytes(file);
+    const std::size_t from = bytes.find("<Points>");
+    for (std::size_t i = from; i < bytes.size(); i += 3) {
+      std::string s = bytes;
+      s[i] = static_cast<char>(s[i] ^ 0x5A);
+      (void)parse_vtu(s, "bad.vtu");
+    }
+  }
+  // Sizes in the zlib block header: each refused before anything is allocated.
+  const std::string raw = fixture_bytes("vtk_appended_raw.vtu");  // UInt64 headers, the points at offset 0
+  const std::size_t data = raw.find('_', raw.find("<AppendedData")) + 1;
+  auto with_header = [&](int item, std::uint64_t value) {
+    std::string s = raw;
+    std::memcpy(s.data() + data + 8 * static_cast<std::size_t>(item), &value, 8);
+    return s;
+  };
+  std::string m = expect_fails(with_header(0, ~std::uint64_t{0}), "nblocks");
+  EXPECT_NE(m.find("DataArray 'Points'"), std::string::npos) << m;
+  EXPECT_NE(m.find("block sizes"), std::string::npos) << m;
+  m = expect_fails(with_header(0, 2), "two blocks");
+  EXPECT_NE(m.find("expected 864"), std::string::npos) << m;  // 36 points x 3 x 8 bytes
+  {
+    std::string t = with_header(0, 3);
+    const std::uint64_t huge = std::uint64_t{1} << 63;
+    std::memcpy(t.data() + data + 8, &huge, 8);
+    m = expect_fails(t, "block size overflow");
+    EXPECT_NE(m.find("overflow"), std::string::npos) << m;
+  }
+  m = expect_fails(with_header(2, 1u << 20), "last block");
+  EXPECT_NE(m.find("larger than the block size"), std::string::npos) << m;
+  m = expect_fails(with_header(3, std::uint64_t{1} << 40), "compressed size");
+  EXPECT_NE(m.find("does not fit"), std::string::npos) << m;
+  m = expect_fails(with_header(3, 8), "short compressed block");
+  EXPECT_NE(m.find("compressed block 0"), std::string::npos) << m;
+  // A block claiming far more than its compressed bytes can hold (a "zip bomb" of 1.5 GB).
+  {
+    const std::uint64_t n = std::uint64_t{1} << 26;
+    std::string t = with_header(1, 24 * n);
+    std::memcpy(t.data() + data + 16, "\0\0\0\0\0\0\0\0", 8);
+    const std::string np = "NumberOfPoints=\"36\"";
+    t.replace(t.find(np), np.size(), "NumberOfPoints=\"" + std::to_string(n) + "\"");
+    m = expect_fails(t, "bomb");
+    EXPECT_NE(m.find("more than zlib can produce"), std::string::npos) << m;
+  }
+  // Bad offsets and encodings.
+  std::string s = raw;
+  s.replace(s.find("offset=\"0\""), 10, "offset=\"999999\"");
+  m = expect_fails(s, "offset");
+  EXPECT_NE(m.find("outside the"), std::string::npos) << m;
+  s = raw;
+  s.replace(s.find("encoding=\"raw\""), 14, "encoding=\"hex\"");
+  m = expect_fails(s, "encoding");
+  EXPECT_NE(m.find("encoding"), std::string::npos) << m;
+  s = raw;
+  s.erase(s.find("</AppendedData>"), 15);
+  m = expect_fails(s, "no end tag");
+  EXPECT_NE(m.find("</AppendedData>"), std::string::npos) << m;
+  s = raw;
+  s.erase(data - 1, 1);
+  m = expect_fails(s, "no underscore");
+  EXPECT_NE(m.find("'_'"), std::string::npos) << m;
+  // Appended arrays without <AppendedData>.
+  s = raw.substr(0, raw.find("<AppendedData")) + "</VTKFile>\n";
+  m = expect_fails(s, "no appended data");
+  EXPECT_NE(m.find("no <AppendedData>"), std::string::npos) << m;
+  // Invalid base64 in appended base64 data.
+  s = fixture_bytes("vtk_default.vtu");
+  s[s.find('_', s.find("<AppendedData")) + 5] = '*';
+  m = expect_fails(s, "base64");
+  EXPECT_NE(m.find("invalid base64"), std::string::npos) << m;
 }
 
 TEST(Pvd, RewritesTheSeriesAfterEveryStep) {

@@ -6,8 +6,10 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "shatter/core/file_io.h"
 #include "shatter/mesh/generate.h"
@@ -210,6 +212,12 @@ TEST(StaticCase, ResolvesAnchorsAndLoads) {
   const StaticProblem p = make_static_problem(*c, *r);
   EXPECT_TRUE(p.gravity);
   EXPECT_EQ(p.anchors.size(), static_cast<std::size_t>(mesh.num_nodes()));
+  // Node 1 is held (node 2 is not) and z is held on the loaded end: half of the first load and all
+  // of the third are not applied, and each is named (the x load on the rollers is applied).
+  ASSERT_EQ(r->warnings.size(), 2u);
+  EXPECT_EQ(r->warnings[0].rfind("good.json: loads[0]: 50 % of the load falls on held components", 0), 0u)
+      << r->warnings[0];
+  EXPECT_EQ(r->warnings[1].rfind("good.json: loads[2]: all of the load", 0), 0u) << r->warnings[1];
 }
 
 TEST(StaticCase, ResolveErrorsNameTheField) {
@@ -385,6 +393,79 @@ TEST(StaticCli, OutputFailureExits4) {
   auto r =
       test::run_command(test::cli_path() + " static " + f.mesh_path + " --case " + good + " --out " + blocker, true);
   EXPECT_EQ(r.status, 4) << r.output;
+}
+
+// A run whose later output cannot be written replaces none of the earlier results: every file of
+// the previous run stays byte for byte, and no temporary is left behind.
+// A NUL in a case or material name is refused with the field named; it used to cut the message
+// short, and a case name with one made a stray output folder before failing with exit 4.
+TEST(StaticCli, NulInANameIsABadInput) {
+  CliFixture f;
+  for (const auto& [text, field] : std::vector<std::pair<std::string, std::string>>{
+           {R"({"name": "bar\u0000x", "material": "steel", "anchors": [{"nodes": [1]}]})", "name"},
+           {R"({"material": "st\u0000eel", "anchors": [{"nodes": [1]}]})", "material"}}) {
+    const std::string case_path = f.write_case("nul.json", text);
+    auto r = test::run_command(
+        "cd " + f.dir.file("") + " && " + test::cli_path() + " static " + f.mesh_path + " --case " + case_path, true);
+    EXPECT_EQ(r.status, 3) << r.output;
+    EXPECT_NE(r.output.find(field + ": expected a string without NUL"), std::string::npos) << r.output;
+    for (const auto& e : std::filesystem::directory_iterator(f.dir.file("")))
+      EXPECT_EQ(e.path().filename().string().find("_out"), std::string::npos) << e.path();
+  }
+}
+
+// A load on held nodes is not applied; the run says so instead of listing it silently.
+TEST(StaticCli, LoadOnHeldNodesIsNamed) {
+  CliFixture f;
+  const std::string case_path = f.write_case("held.json", R"({"material": "steel", "model": "linear",
+    "anchors": [{"plane": {"point": [0, 0, 0], "normal": [1, 0, 0]}}],
+    "loads": [{"box": {"min": [2, 0, 0], "max": [2, 1, 1]}, "total_force": [0, -1000, 0]},
+              {"plane": {"point": [0, 0, 0], "normal": [1, 0, 0]}, "total_force": [0, -5, 0]}]})");
+  auto r = test::run_command(
+      test::cli_path() + " static " + f.mesh_path + " --case " + case_path + " --out " + f.dir.file("out"), true);
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("shatter: warning: " + case_path + ": loads[1]: all of the load falls on held"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("loads[0]:"), std::string::npos) << r.output;
+}
+
+TEST(StaticCli, FailedRunKeepsEveryEarlierOutput) {
+  CliFixture f;
+  const std::string out = f.dir.file("out");
+  const std::string first = f.write_case("first.json", kCliCase);
+  ASSERT_EQ(
+      test::run_command(test::cli_path() + " static " + f.mesh_path + " --case " + first + " --out " + out).status, 0);
+  const std::filesystem::path dir(out);
+  std::map<std::string, std::string> before;
+  for (const char* name : {"displacements.csv", "elements.csv"}) before[name] = read_text(dir / name);
+  // A different load (so every file would change), and result.vtu's place taken by a folder.
+  std::string twice = kCliCase;
+  twice.replace(twice.find("-1.0e6"), 6, "-2.0e6");
+  const std::string second = f.write_case("second.json", twice);
+  std::filesystem::remove(dir / "result.vtu");
+  std::filesystem::create_directory(dir / "result.vtu");
+  for (const char* blocked : {"result.vtu", "elements.csv"}) {
+    SCOPED_TRACE(blocked);
+    if (std::string(blocked) == "elements.csv") {
+      // The same with the second output blocked (and the third free).
+      std::filesystem::remove(dir / "result.vtu");
+      std::filesystem::rename(dir / "elements.csv", dir / "kept.csv");
+      std::filesystem::create_directory(dir / "elements.csv");
+    }
+    auto r =
+        test::run_command(test::cli_path() + " static " + f.mesh_path + " --case " + second + " --out " + out, true);
+    EXPECT_EQ(r.status, 4) << r.output;
+    EXPECT_NE(r.output.find(blocked), std::string::npos) << r.output;
+    EXPECT_EQ(read_text(dir / "displacements.csv"), before["displacements.csv"]);
+    if (std::string(blocked) == "result.vtu") {
+      EXPECT_EQ(read_text(dir / "elements.csv"), before["elements.csv"]);
+    } else {
+      EXPECT_FALSE(std::filesystem::exists(dir / "result.vtu"));
+    }
+    for (const auto& e : std::filesystem::directory_iterator(dir))
+      EXPECT_NE(e.path().filename().string().rfind(".shatter-", 0), 0u) << e.path();
+  }
 }
 
 }  // namespace

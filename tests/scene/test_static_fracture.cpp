@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 #include <string>
@@ -14,6 +15,7 @@
 
 #include "shatter/core/file_io.h"
 #include "shatter/fracture/fragments.h"
+#include "shatter/mesh/generate.h"
 #include "shatter/mesh/io/mesh_io.h"
 #include "shatter/scene/static_case.h"
 #include "support/test_support.h"
@@ -239,6 +241,85 @@ TEST(StaticFractureCli, OtherFragmentFormats) {
   auto bad = run_static(kExamples + "glass_bar/bar.vtk", kExamples + "glass_bar/case.json", dir.file("o2"),
                         "--fracture --fragment-format obj", true);
   EXPECT_EQ(bad.status, 2) << bad.output;
+}
+
+// --fracture whose fragments.vtu cannot be written: the earlier fragment files all stay as they were
+// (none deleted, none replaced), and so do the earlier displacements.
+TEST(StaticFractureCli, FailedRunKeepsEveryEarlierFragment) {
+  test::TempDir dir;
+  const std::string out = dir.file("out");
+  const std::string mesh = kExamples + "glass_bar/bar.vtk";
+  ASSERT_EQ(run_static(mesh, kExamples + "glass_bar/case.json", out, "--fracture").status, 0);
+  const fs::path d(out);
+  std::map<std::string, std::string> before;
+  for (const char* name : {"fragment_0.vtu", "fragment_1.vtu", "displacements.csv", "cracks.csv"})
+    before[name] = read_text(d / name);
+  fs::remove(d / "fragments.vtu");
+  fs::create_directory(d / "fragments.vtu");
+  // Below strength: one fragment, so fragment_1.vtu would be removed by a run that succeeds.
+  const std::string whole = write_case(dir, "whole.json", glass_case(1000.0));
+  auto r = run_static(mesh, whole, out, "--fracture", true);
+  EXPECT_EQ(r.status, 4) << r.output;
+  EXPECT_NE(r.output.find("fragments.vtu"), std::string::npos) << r.output;
+  for (const auto& [name, text] : before) EXPECT_EQ(read_text(d / name), text) << name;
+  // The same run with the folder free replaces them all, and removes the stale fragment_1.
+  fs::remove(d / "fragments.vtu");
+  auto ok = run_static(mesh, whole, out, "--fracture", true);
+  ASSERT_EQ(ok.status, 0) << ok.output;
+  EXPECT_FALSE(fs::exists(d / "fragment_1.vtu"));
+  EXPECT_NE(read_text(d / "displacements.csv"), before["displacements.csv"]);
+}
+
+// The glass bar moved to x = 1e7 m (map coordinates) under 1 N: its displacements are below the
+// spacing of the doubles there and the residual stalls near 1. That must end as "not converged"
+// (exit 1, nothing written), never as a converged wrong answer; at the origin the same case converges.
+TEST(StaticFractureCli, FarFromTheOriginIsNotAFalseSuccess) {
+  test::TempDir dir;
+  auto bar = read_mesh(kExamples + "glass_bar/bar.vtk");
+  ASSERT_OK(bar);
+  auto case_at = [&](double x0) {
+    const std::string p = std::to_string(x0), q = std::to_string(x0 + 0.2);
+    return R"({"material": "glass", "model": "linear", "anchors": [
+      {"plane": {"point": [)" +
+           p + R"(, 0, 0], "normal": [1, 0, 0]}, "components": "x"},
+      {"plane": {"point": [0, 0, 0], "normal": [0, 1, 0]}, "components": "y"},
+      {"plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}, "components": "z"}],
+      "loads": [{"plane": {"point": [)" +
+           q + R"(, 0, 0], "normal": [1, 0, 0]}, "total_force": [1, 0, 0]}]})";
+  };
+  TetMesh far = bar->mesh;
+  for (Vec3& v : far.positions) v.x() += 1e7;
+  ASSERT_OK(write_mesh(dir.file("far.vtu"), far));
+  const std::string out = dir.file("out");
+  auto r = run_static(dir.file("far.vtu"), write_case(dir, "far.json", case_at(1e7)), out, "", true);
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("round-off"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(fs::path(out) / "displacements.csv"));
+  auto ok =
+      run_static(kExamples + "glass_bar/bar.vtk", write_case(dir, "near.json", case_at(0)), dir.file("near"), "", true);
+  EXPECT_EQ(ok.status, 0) << ok.output;
+}
+
+// A mesh of two separate pieces that nothing breaks: the summary says so with the fragment count
+// it then lists (it used to say "1 fragment" and list 2).
+TEST(StaticFractureCli, SeparatePiecesAreCountedNotCracked) {
+  test::TempDir dir;
+  TetMesh a = make_box_mesh({.max = Vec3(0.2, 0.02, 0.02), .cells = {5, 1, 1}});
+  const TetMesh b = make_box_mesh({.min = Vec3(0, 0.05, 0), .max = Vec3(0.2, 0.07, 0.02), .cells = {5, 1, 1}});
+  const Index offset = a.num_nodes();
+  a.positions.insert(a.positions.end(), b.positions.begin(), b.positions.end());
+  for (TetIndices t : b.tets) {
+    for (int k = 0; k < 4; ++k) t[k] += offset;
+    a.tets.push_back(t);
+  }
+  ASSERT_OK(write_mesh(dir.file("two.vtu"), a));
+  const std::string case_path = write_case(dir, "two.json", R"({"material": "glass", "model": "linear",
+      "anchors": [{"plane": {"point": [0, 0, 0], "normal": [1, 0, 0]}}],
+      "loads": [{"plane": {"point": [0.2, 0, 0], "normal": [1, 0, 0]}, "total_force": [10, 0, 0]}]})");
+  auto r = run_static(dir.file("two.vtu"), case_path, dir.file("out"), "--fracture", true);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("nothing breaks: no crack, 2 fragment(s)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("fragment 1"), std::string::npos) << r.output;
 }
 
 TEST(StaticFractureCli, BelowStrengthStaysWhole) {

@@ -1,6 +1,7 @@
 """Cross-check helper for the mesh readers and writers, driven by tests/mesh/test_io_meshio.cpp.
 
   meshio_check.py write IN.json OUT FORMAT [binary]  # meshio writes the mesh in IN.json
+                                                    # (FORMAT vtu_default: meshio's default VTU)
   meshio_check.py read PATH                         # meshio reads PATH, prints points and tets as JSON
 
 IN.json: {"points": [[x, y, z], ...], "tets": [[a, b, c, d], ...]} (0-based).
@@ -33,6 +34,8 @@ def main():
         if fmt == "vtu":
             kwargs["binary"] = binary
             kwargs["compression"] = None
+        if fmt == "vtu_default":  # meshio's defaults: inline base64, zlib-compressed
+            fmt = "vtu"
         meshio.write(sys.argv[3], mesh, file_format=fmt, **kwargs)
     else:
         mesh = meshio.read(sys.argv[2])

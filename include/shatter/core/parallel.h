@@ -12,7 +12,11 @@
 
 namespace shatter {
 
-/// Threads used by shatter's parallel loops (default: hardware threads). 1 = serial; n < 1 counts as 1.
+/// Most threads set_num_threads accepts: the OpenMP runtime sizes per-thread state for the count it
+/// is given (2^31 threads asked 481 GB of it), so larger counts are clamped here and refused by the CLI.
+inline constexpr int kMaxThreads = 1024;
+/// Threads used by shatter's parallel loops (default: hardware threads). 1 = serial; n < 1 counts
+/// as 1, n > kMaxThreads as kMaxThreads.
 void set_num_threads(int n);
 /// Threads the parallel loops use now (always 1 in a build without OpenMP).
 int num_threads();

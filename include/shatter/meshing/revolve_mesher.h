@@ -37,7 +37,11 @@ struct RevolvedShape {
 /// other tree.
 std::optional<RevolvedShape> revolved_shape(const Sdf& sdf);
 
-/// Size settings of the revolve mesher.
+/// Most angular segments of a sweep (given or derived from the edge length).
+inline constexpr int kMaxRevolveSegments = 100'000;
+
+/// Size settings of the revolve mesher. Sizes beyond the limits are refused before anything is
+/// allocated (resampled profile points, segments, and their product as a tet estimate).
 struct RevolveDef {
   /// Profile spacing and circumferential spacing at the largest radius, m. If 0, chosen to get
   /// about `target_tets`.
@@ -46,6 +50,10 @@ struct RevolveDef {
   /// Angular segments; 0: max(min_segments, round(2 pi r_max / edge_length)).
   int segments = 0;
   int min_segments = 6;  ///< fewest segments of any sweep or angular level (>= 3)
+  /// Most points of the resampled profile (its triangulation takes time quadratic in them).
+  std::int64_t max_profile_points = 20'000;
+  /// Most tets (3 per profile triangle and segment); also the largest target_tets.
+  std::int64_t max_tets = 20'000'000;
 };
 
 /// What the revolve mesher did.

@@ -62,6 +62,8 @@ struct StaticOutputs {
 /// element stresses and a VTU; with fracture also one mesh per fragment in `fragment_format`
 /// (a mesh extension: vtu, vtk, msh, mesh, inp, node), the whole cut mesh, the cracks and the
 /// plastic rest shape. fragment_<k> files left by an earlier run with more fragments are removed.
+/// The files are replaced all together or not at all: if any cannot be written, every file of an
+/// earlier run in `out_dir` is left as it was.
 Result<StaticOutputs> write_static_outputs(const std::string& out_dir, const TetMesh& mesh,
                                            const StaticAnalysis& analysis, const std::string& fragment_format = "vtu");
 

@@ -77,6 +77,9 @@ struct ResolvedStaticCase {
   std::vector<Vec3> forces;        ///< external nodal forces without gravity, N (#nodes)
   Vec3 total_load = Vec3::Zero();  ///< sum of `forces`, N
   Index num_held_nodes = 0;        ///< nodes with at least one held component
+  /// Loads (partly or wholly) on held components or on nodes no tet uses, whose force there is not
+  /// applied: one line each, naming the file and the load.
+  std::vector<std::string> warnings;
 };
 
 /// Select the nodes of every anchor and load. Errors name the case file and the JSON path: an id

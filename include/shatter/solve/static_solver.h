@@ -39,6 +39,11 @@ struct StaticSolverOptions {
   /// bodies, tight tolerances), a residual within its estimated round-off that a Newton step no
   /// longer reduces counts as converged.
   double relative_residual_tolerance = 1e-6;
+  /// The largest relative residual the round-off rule above may accept under an external load.
+  /// Above it the round-off is itself the error (a mesh far from the origin: at x = 1e7 m a glass bar's displacements are
+  /// below the spacing of the doubles, and the residual stalls near 1), and the solve ends
+  /// not converged instead of reporting a wrong answer as converged.
+  double max_round_off_residual = 1e-3;
   /// Backtracking (Armijo) on the potential energy U(x) - f_ext^T x. Without it a step is only
   /// tried at full length (and still rejected when the energy rises or turns non-finite).
   bool line_search = true;

@@ -1,5 +1,6 @@
 #include "shatter/core/file_io.h"
 
+#include <atomic>
 #include <cctype>
 #include <cerrno>
 #include <cstring>
@@ -14,9 +15,121 @@ namespace shatter {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+thread_local OutputBatch* t_batch = nullptr;  // outermost open batch of this thread
+
+// A short name beside `target` for a temporary or a backup: short so that a target name near the
+// file-system limit (255 bytes) still has room, unique per process and call.
+fs::path sibling_name(const fs::path& target, const char* kind) {
+  static std::atomic<std::uint64_t> counter{0};
+  return target.parent_path() /
+         (".shatter-" + std::string(kind) + "-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+}
+
+}  // namespace
+
+OutputBatch::OutputBatch() {
+  if (t_batch)
+    outer_ = t_batch;
+  else
+    t_batch = this;
+}
+
+OutputBatch::~OutputBatch() {
+  if (outer_) return;
+  discard();
+  t_batch = nullptr;
+}
+
+OutputBatch* OutputBatch::current() { return t_batch; }
+
+void OutputBatch::stage(const std::string& target, const std::string& temp) {
+  for (Staged& s : staged_)
+    if (s.target == target) {
+      std::error_code ec;
+      fs::remove(s.temp, ec);
+      s.temp = temp;
+      return;
+    }
+  staged_.push_back({target, temp});
+}
+
+void OutputBatch::remove_on_commit(const std::string& path) {
+  if (outer_)
+    outer_->remove_on_commit(path);
+  else
+    remove_.push_back(path);
+}
+
+void OutputBatch::discard() {
+  std::error_code ec;
+  for (const Staged& s : staged_) fs::remove(s.temp, ec);
+  staged_.clear();
+  remove_.clear();
+}
+
+Result<void> OutputBatch::commit() {
+  if (outer_) return {};
+  std::error_code ec;
+  // Keep each earlier file under a second name (a hard link: nothing copied) so that a failed
+  // rename half-way can put back the ones already replaced.
+  std::vector<std::string> backup(staged_.size());
+  for (std::size_t k = 0; k < staged_.size(); ++k) {
+    if (!fs::is_regular_file(staged_[k].target, ec)) continue;
+    const fs::path b = sibling_name(staged_[k].target, "old");
+    fs::create_hard_link(staged_[k].target, b, ec);
+    if (ec) fs::copy_file(staged_[k].target, b, ec);  // a file system without hard links
+    if (ec) {
+      const std::string target = staged_[k].target;
+      for (const std::string& p : backup)
+        if (!p.empty()) fs::remove(p, ec);
+      discard();
+      return file_error(target, "cannot keep the earlier file while replacing it: " + ec.message() +
+                                    "; none of this run's outputs were written");
+    }
+    backup[k] = b.string();
+  }
+  for (std::size_t k = 0; k < staged_.size(); ++k) {
+    fs::rename(staged_[k].temp, staged_[k].target, ec);
+    if (!ec) continue;
+    const std::string why = ec.message();
+    std::error_code ec2;
+    for (std::size_t j = 0; j < k; ++j) {
+      if (!backup[j].empty())
+        fs::rename(backup[j], staged_[j].target, ec2);
+      else
+        fs::remove(staged_[j].target, ec2);
+    }
+    for (std::size_t j = k; j < staged_.size(); ++j)
+      if (!backup[j].empty()) fs::remove(backup[j], ec2);
+    const std::string target = staged_[k].target;
+    discard();
+    return file_error(target,
+                      "cannot rename the temporary into place: " + why + "; none of this run's outputs were replaced");
+  }
+  for (const std::string& p : backup)
+    if (!p.empty()) fs::remove(p, ec);
+  for (const std::string& p : remove_) fs::remove(p, ec);
+  staged_.clear();
+  remove_.clear();
+  return {};
+}
+
 Result<std::string> read_file(const std::string& path, std::uint64_t max_bytes) {
   std::error_code ec;
-  if (fs::is_directory(path, ec)) return file_error(path, "is a directory, expected a file");
+  // Only regular files: opening a named pipe blocks until someone writes to it, and a device
+  // (/dev/zero) never ends. Checked by status, which opens nothing.
+  const fs::file_status st = fs::status(path, ec);
+  if (fs::is_directory(st)) return file_error(path, "is a directory, expected a file");
+  if (fs::exists(st) && !fs::is_regular_file(st))
+    return file_error(path, std::string("is not a regular file (") +
+                                (fs::is_fifo(st)             ? "a named pipe"
+                                 : fs::is_character_file(st) ? "a character device"
+                                 : fs::is_block_file(st)     ? "a block device"
+                                 : fs::is_socket(st)         ? "a socket"
+                                                             : "an unknown kind of file") +
+                                "), expected a file");
   std::ifstream in(path, std::ios::binary);
   if (!in) return file_error(path, std::string("cannot open for reading: ") + std::strerror(errno));
   in.seekg(0, std::ios::end);
@@ -36,7 +149,7 @@ Result<void> write_file_atomic(const std::string& path, const std::function<Resu
   if (target.filename().empty()) return file_error(path, "output path names no file");
   std::error_code ec;
   if (fs::is_directory(target, ec)) return file_error(path, "is a directory, expected a file path");
-  const fs::path tmp = target.parent_path() / ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()));
+  const fs::path tmp = sibling_name(target, "tmp");
   Result<void> status;
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
@@ -57,6 +170,10 @@ Result<void> write_file_atomic(const std::string& path, const std::function<Resu
     fs::remove(tmp, ec);
     if (status.error().file.empty()) status.error().file = path;
     return status;
+  }
+  if (OutputBatch* batch = OutputBatch::current()) {
+    batch->stage(path, tmp.string());
+    return {};
   }
   fs::rename(tmp, target, ec);
   if (ec) {

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <vector>
 
 namespace shatter::json_input {
 namespace {
@@ -51,8 +53,85 @@ Error Where::error(std::string message) const {
 }
 
 Result<Json> parse_json(std::string_view text, const std::string& file) {
+  // Nesting bounded before parsing: the readers of shapes, cases and scenes walk the tree
+  // recursively, so a file of 10,000 nested objects must be an error, not a stack overflow.
+  {
+    int depth = 0;
+    bool in_string = false;
+    std::int64_t line = 1;
+    for (std::size_t i = 0; i < text.size(); ++i) {
+      const char c = text[i];
+      if (c == '\n') ++line;
+      if (in_string) {
+        if (c == '\\')
+          ++i;  // skip the escaped character (an escaped newline is invalid JSON anyway)
+        else if (c == '"')
+          in_string = false;
+      } else if (c == '"') {
+        in_string = true;
+      } else if (c == '{' || c == '[') {
+        if (++depth > kMaxJsonDepth)
+          return line_error(
+              file, line, "JSON nested deeper than " + std::to_string(kMaxJsonDepth) + " levels of objects and arrays");
+      } else if (c == '}' || c == ']') {
+        --depth;  // unbalanced brackets are the parser's to report
+      }
+    }
+  }
+  // Duplicate keys are errors (nlohmann would silently keep the last value): each open object
+  // keeps the keys seen so far, and the path of the first repeat is kept for the message.
+  struct Frame {
+    bool object = false;
+    std::vector<std::string> keys;  // object: keys seen
+    std::string current;            // object: the key being read; array: "[i]" of the element
+    std::size_t count = 0;          // array: elements so far
+  };
+  std::vector<Frame> frames;
+  std::string duplicate;  // path of the first repeated key, "" if none
+  auto path = [&] {
+    std::string out;
+    for (const Frame& f : frames) {
+      if (f.current.empty()) continue;
+      if (f.object && !out.empty()) out += '.';
+      out += f.current;
+    }
+    return out;
+  };
+  auto element = [&] {  // a value or a container starts in an array: name its index
+    if (!frames.empty() && !frames.back().object)
+      frames.back().current = "[" + std::to_string(frames.back().count++) + "]";
+  };
+  const Json::parser_callback_t track = [&](int, Json::parse_event_t event, Json& parsed) {
+    switch (event) {
+      case Json::parse_event_t::object_start:
+      case Json::parse_event_t::array_start:
+        element();
+        frames.push_back(Frame{event == Json::parse_event_t::object_start, {}, {}, 0});
+        break;
+      case Json::parse_event_t::object_end:
+      case Json::parse_event_t::array_end:
+        if (!frames.empty()) frames.pop_back();
+        break;
+      case Json::parse_event_t::key:
+        if (!frames.empty() && parsed.is_string()) {
+          Frame& f = frames.back();
+          f.current = parsed.get<std::string>();
+          if (std::find(f.keys.begin(), f.keys.end(), f.current) != f.keys.end()) {
+            if (duplicate.empty()) duplicate = path();
+          } else {
+            f.keys.push_back(f.current);
+          }
+        }
+        break;
+      case Json::parse_event_t::value: element(); break;
+    }
+    return true;
+  };
   try {
-    return Json::parse(text.begin(), text.end());
+    Json doc = Json::parse(text.begin(), text.end(), track);
+    if (!duplicate.empty())
+      return file_error(file, "duplicate key " + duplicate + ": each key may appear once in an object");
+    return doc;
   } catch (const Json::parse_error& e) {
     // Turn the byte position into a line number.
     const std::size_t byte = std::min<std::size_t>(e.byte > 0 ? e.byte - 1 : 0, text.size());
@@ -63,7 +142,11 @@ Result<Json> parse_json(std::string_view text, const std::string& file) {
     if (colon != std::string::npos) what = what.substr(colon + 2);
     return line_error(file, line, "invalid JSON: " + what);
   } catch (const std::exception& e) {
-    return file_error(file, std::string("invalid JSON: ") + e.what());
+    // e.g. "[json.exception.out_of_range.406] number overflow parsing '1e400'": without the tag.
+    std::string what = e.what();
+    if (what.rfind("[json.exception.", 0) == 0 && what.find("] ") != std::string::npos)
+      what = what.substr(what.find("] ") + 2);
+    return file_error(file, "invalid JSON: " + what);
   }
 }
 
@@ -183,7 +266,10 @@ Result<bool> read_bool(const Json& value, const Where& where) {
 
 Result<std::string> read_string(const Json& value, const Where& where) {
   if (!value.is_string()) return where.error("expected a string, got " + type_name(value));
-  return value.get<std::string>();
+  std::string s = value.get<std::string>();
+  // A NUL ("\u0000") would cut the name short in messages and in the file names made from it.
+  if (s.find('\0') != std::string::npos) return where.error("expected a string without NUL characters (\\u0000)");
+  return s;
 }
 
 Result<Vec2> read_vec2(const Json& value, const Where& where) {

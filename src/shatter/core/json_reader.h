@@ -30,7 +30,10 @@ struct Where {
   [[nodiscard]] Error error(std::string message) const;
 };
 
-/// Parse JSON text. Syntax errors name the line (Error::line) and what was wrong.
+/// Deepest nesting of objects and arrays parse_json accepts (a shape tree of 128 levels).
+inline constexpr int kMaxJsonDepth = 256;
+/// Parse JSON text. Syntax errors name the line (Error::line) and what was wrong; nesting deeper
+/// than kMaxJsonDepth is refused before parsing (the readers recurse over the tree).
 Result<Json> parse_json(std::string_view text, const std::string& file);
 
 /// A short description of a JSON value's type for messages ("a string", "an array", ...).
@@ -74,6 +77,7 @@ Result<double> read_positive(const Json& value, const Where& where);
 Result<double> read_non_negative(const Json& value, const Where& where);
 Result<std::int64_t> read_integer(const Json& value, const Where& where);
 Result<bool> read_bool(const Json& value, const Where& where);
+/// A string without NUL characters (they would cut names short in messages and file names).
 Result<std::string> read_string(const Json& value, const Where& where);
 /// [x, y] of finite numbers.
 Result<Vec2> read_vec2(const Json& value, const Where& where);

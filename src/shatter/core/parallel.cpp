@@ -8,7 +8,7 @@ namespace {
 int g_threads = 0;  // 0 = not set: hardware concurrency
 }
 
-void set_num_threads(int n) { g_threads = std::max(1, n); }
+void set_num_threads(int n) { g_threads = std::clamp(n, 1, kMaxThreads); }
 
 int num_threads() {
   if (g_threads > 0) return g_threads;

@@ -104,17 +104,26 @@ ValidationReport validate_mesh(const TetMesh& mesh, const ValidateOptions& optio
       tet_ok[e] = 0;
       continue;
     }
+    // The test is relative (volume against the mean edge cubed), so it is made on the tet moved to
+    // corner 0 and scaled to unit size: coordinates near +-1e308 or 1e100 times a unit mesh no
+    // longer overflow into inf - inf = nan. Halves first, so the differences cannot overflow.
+    Mat34 y;
+    for (int a = 0; a < 4; ++a) y.col(a) = 0.5 * x.col(a) - 0.5 * x.col(0);
+    const double size = y.cwiseAbs().maxCoeff();
+    if (size > 0) y /= size;
     double mean_edge = 0.0;
     for (int a = 0; a < 4; ++a)
-      for (int b = a + 1; b < 4; ++b) mean_edge += (x.col(a) - x.col(b)).norm() / 6.0;
-    const double v = signed_volume(x.col(0), x.col(1), x.col(2), x.col(3));
-    const double eps = options.relative_volume_epsilon * mean_edge * mean_edge * mean_edge;
-    if (!(std::abs(v) > eps)) {
+      for (int b = a + 1; b < 4; ++b) mean_edge += (y.col(a) - y.col(b)).norm() / 6.0;
+    const double unit_v = signed_volume(y.col(0), y.col(1), y.col(2), y.col(3));
+    const double unit_eps = options.relative_volume_epsilon * mean_edge * mean_edge * mean_edge;
+    const double scale3 = 8.0 * size * size * size;  // back to m^3 for the messages (may be inf)
+    const double v = unit_v * scale3, eps = unit_eps * scale3;
+    if (!(std::abs(unit_v) > unit_eps)) {
       std::ostringstream s;
       s << describe_tet(mesh, e) << " has volume " << v << ", degenerate (|volume| <= " << eps << ')';
       c.add(MeshProblemKind::degenerate_tet, Severity::error, s.str());
       tet_ok[e] = 0;
-    } else if (v < 0) {
+    } else if (unit_v < 0) {
       std::ostringstream s;
       s << describe_tet(mesh, e) << " is inverted (volume " << v << ")";
       c.add(MeshProblemKind::inverted_tet, Severity::warning, s.str());

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -53,6 +54,57 @@ std::vector<Vec2> resample(const std::vector<Vec2>& poly, double h) {
     }
   }
   return out;
+}
+
+// What a sweep at edge length h would hold, computed without building it: the resampled profile's
+// points (as resample() counts them), the segments, and about 3 tets per point and segment.
+struct SweepSize {
+  double points = 0, segments = 0, tets = 0;
+};
+SweepSize sweep_size(const std::vector<Vec2>& poly, double h, const RevolveDef& def) {
+  SweepSize z;
+  double scale = 0, rmax = 0;
+  for (const Vec2& p : poly) {
+    scale = std::max(scale, p.cwiseAbs().maxCoeff());
+    rmax = std::max(rmax, p.x());
+  }
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const double len = (poly[(i + 1) % poly.size()] - poly[i]).norm();
+    if (len > 1e-12 * scale) z.points += std::max(1.0, std::ceil(len / h - 1e-9));
+  }
+  z.segments = def.segments > 0 ? def.segments
+                                : std::max<double>(def.min_segments, std::round(2.0 * std::numbers::pi * rmax / h));
+  z.tets = 3.0 * z.points * z.segments;
+  return z;
+}
+
+// A count for messages: whole numbers as such, astronomically large ones in %g.
+std::string count_text(double v) {
+  if (v < 1e15) return std::to_string(std::llround(v));
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+
+// An error when a sweep of that size is beyond the limits of `def`, naming the limit.
+Result<void> check_sweep_size(const std::vector<Vec2>& profile, const SweepSize& z, double h, const RevolveDef& def) {
+  if (profile.size() > static_cast<std::size_t>(def.max_profile_points))
+    return field_error("profile", "the profile has " + std::to_string(profile.size()) + " points (limit " +
+                                      std::to_string(def.max_profile_points) + "): expected a simpler profile");
+  auto fail = [&](const std::string& what) {
+    char hb[32];
+    std::snprintf(hb, sizeof hb, "%.6g", h);
+    return field_error("edge_length", std::string("edge length ") + hb + " m gives " + what +
+                                          ": expected a larger edge length or fewer segments");
+  };
+  if (!(z.points <= static_cast<double>(def.max_profile_points)))
+    return fail("a profile of about " + count_text(z.points) + " points (limit " +
+                std::to_string(def.max_profile_points) + ")");
+  if (!(z.segments <= kMaxRevolveSegments))
+    return fail(count_text(z.segments) + " segments (limit " + std::to_string(kMaxRevolveSegments) + ")");
+  if (!(z.tets <= static_cast<double>(def.max_tets)))
+    return fail("about " + count_text(z.tets) + " tets (limit " + std::to_string(def.max_tets) + ")");
+  return {};
 }
 
 struct Sweep {
@@ -343,6 +395,7 @@ bool sweep_with_levels(const Sweep& s, const std::vector<int>& level, TetMesh& m
 }
 
 Result<Sweep> plan(const std::vector<Vec2>& profile, double h, const RevolveDef& def, bool levels) {
+  if (auto ok = check_sweep_size(profile, sweep_size(profile, h, def), h, def); !ok) return std::move(ok.error());
   Sweep s;
   s.points = resample(profile, h);
   auto tris = triangulate_polygon(s.points);
@@ -479,6 +532,12 @@ Result<TetMesh> mesh_revolution(const Sdf& sdf, const RevolveDef& def, RevolveRe
   if (!(def.edge_length > 0) && def.target_tets <= 0)
     return field_error("edge_length", "expected an edge length > 0 m or a tet count > 0");
   if (def.segments < 0 || def.min_segments < 3) return field_error("segments", "expected at least 3 segments");
+  if (def.segments > kMaxRevolveSegments)
+    return field_error("segments", "expected at most " + std::to_string(kMaxRevolveSegments) + " segments, got " +
+                                       std::to_string(def.segments));
+  if (def.target_tets > def.max_tets)
+    return field_error(
+        "tets", "expected at most " + std::to_string(def.max_tets) + " tets, got " + std::to_string(def.target_tets));
 
   // Two sweeps: plain (every profile point at N segments) and with angular levels (fewer segments
   // toward the axis, two-level polytopes between); each sized for the target on its own, and the
@@ -498,6 +557,8 @@ Result<TetMesh> mesh_revolution(const Sdf& sdf, const RevolveDef& def, RevolveRe
       double hi = b.extent().maxCoeff() / shape->transform.scale;
       std::int64_t best = -1;
       for (double t = hi; t > hi * 1e-4; t *= 0.98) {
+        // Finer than the limits allow: the best so far stands (or, if none, plan() says why).
+        if (best >= 0 && !check_sweep_size(shape->profile, sweep_size(shape->profile, t, def), t, def).ok()) break;
         auto sw = plan(shape->profile, t, def, levels);
         if (!sw) return std::move(sw.error());
         const std::int64_t c = sw->tets();

@@ -7,6 +7,7 @@
 #include <system_error>
 #include <utility>
 
+#include "shatter/core/file_io.h"
 #include "shatter/mesh/io/mesh_io.h"
 #include "shatter/scene/static_fracture.h"
 
@@ -16,15 +17,17 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
-// Remove fragment_<k>.<ext> (and .ele beside .node) for k >= first, left by an earlier run that made
-// more fragments, so the folder holds exactly this run's fragments.
-void remove_stale_fragments(const std::filesystem::path& dir, std::size_t first, const std::string& ext) {
+// Mark fragment_<k>.<ext> (and .ele beside .node) for k >= first, left by an earlier run that made
+// more fragments, for removal when the batch commits, so the folder then holds exactly this run's
+// fragments.
+void remove_stale_fragments(OutputBatch& batch, const std::filesystem::path& dir, std::size_t first,
+                            const std::string& ext) {
   for (std::size_t k = first;; ++k) {
     const std::filesystem::path p = dir / ("fragment_" + std::to_string(k) + "." + ext);
     std::error_code ec;
     if (!std::filesystem::is_regular_file(p, ec)) break;
-    std::filesystem::remove(p, ec);
-    if (ext == "node") std::filesystem::remove(dir / ("fragment_" + std::to_string(k) + ".ele"), ec);
+    batch.remove_on_commit(p.string());
+    if (ext == "node") batch.remove_on_commit((dir / ("fragment_" + std::to_string(k) + ".ele")).string());
   }
 }
 
@@ -79,6 +82,9 @@ Result<StaticOutputs> write_static_outputs(const std::string& out_dir, const Tet
   std::filesystem::create_directories(dir, ec);
   if (ec || !std::filesystem::is_directory(dir))
     return file_error(out_dir, "cannot create the output folder" + (ec ? ": " + ec.message() : std::string()));
+  // Every file to a temporary, all renamed at the end: a failure on any output leaves all the
+  // earlier results as they were (the batch removes its temporaries when it goes out of scope).
+  OutputBatch batch;
   StaticOutputs out;
   out.displacements = (dir / "displacements.csv").string();
   out.elements = (dir / "elements.csv").string();
@@ -88,7 +94,10 @@ Result<StaticOutputs> write_static_outputs(const std::string& out_dir, const Tet
        {write_displacements_csv(out.displacements, mesh, results), write_elements_csv(out.elements, mesh, results),
         write_result_mesh(out.result, mesh, results)})
     if (!written) return written.error();
-  if (!analysis.fracture) return out;
+  if (!analysis.fracture) {
+    SHATTER_TRY(committed, batch.commit());
+    return out;
+  }
 
   const FractureResult& frac = *analysis.fracture;
   for (std::size_t k = 0; k < frac.fragments.size(); ++k) {
@@ -97,7 +106,7 @@ Result<StaticOutputs> write_static_outputs(const std::string& out_dir, const Tet
     if (!w) return w.error();
     out.fragments.push_back(p);
   }
-  remove_stale_fragments(dir, frac.fragments.size(), fragment_format);
+  remove_stale_fragments(batch, dir, frac.fragments.size(), fragment_format);
   out.fragments_mesh = (dir / "fragments.vtu").string();
   out.cracks = (dir / "cracks.csv").string();
   for (const auto& written :
@@ -108,6 +117,7 @@ Result<StaticOutputs> write_static_outputs(const std::string& out_dir, const Tet
     auto w = write_rest_shape(out.rest_shape, frac);
     if (!w) return w.error();
   }
+  SHATTER_TRY(committed, batch.commit());
   return out;
 }
 

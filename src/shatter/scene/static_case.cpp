@@ -183,7 +183,8 @@ Result<LoadSpec> read_load(const Json& value, const Where& where) {
 // "glass" | {"preset": "glass", "youngs_modulus": ...} | {"youngs_modulus": ..., ...}
 Result<Material> read_material(const Json& value, const Where& where) {
   if (value.is_string()) {
-    auto m = material_preset(value.get<std::string>());
+    SHATTER_TRY(name, json_input::read_string(value, where));
+    auto m = material_preset(*name);
     if (!m.ok()) return where.error(m.error().message);
     return std::move(*m);
   }
@@ -464,9 +465,15 @@ Result<ResolvedStaticCase> resolve_static_case(const StaticCase& c, const TetMes
   for (std::size_t i = 0; i < n; ++i)
     if (out.held[i]) ++out.num_held_nodes;
 
+  // A load component on a held component is taken by the anchor, and one on a node no tet uses by
+  // nothing: neither is applied, and each load that loses some of its force that way is named.
+  std::vector<char> used(n, 0);
+  for (const TetIndices& t : mesh.tets)
+    for (Index v : t) used[static_cast<std::size_t>(v)] = 1;
   for (const LoadSpec& l : c.loads) {
     auto nodes = select_nodes(mesh, l.where);
     if (!nodes.ok()) return case_error(c, l.field, nodes.error().message);
+    const std::vector<Vec3> before = out.forces;
     if (l.per_node) {
       for (Index i : *nodes) out.forces[i] += l.force;
     } else if (l.distribution == LoadSpec::Distribution::equal) {
@@ -482,6 +489,22 @@ Result<ResolvedStaticCase> resolve_static_case(const StaticCase& c, const TetMes
                           "one boundary triangle; the " +
                               std::to_string(nodes->size()) + " selected node(s) span none");
       for (std::size_t k = 0; k < nodes->size(); ++k) out.forces[(*nodes)[k]] += l.force * (area[k] / total);
+    }
+    double given = 0, lost = 0;  // sums of |component|, N
+    for (Index i : *nodes) {
+      const Vec3 f = out.forces[i] - before[i];
+      for (int k = 0; k < 3; ++k) {
+        given += std::abs(f[k]);
+        if (!used[i] || (out.held[i] & (1u << k))) lost += std::abs(f[k]);
+      }
+    }
+    if (lost > 1e-12 * given) {
+      char pct[32];
+      std::snprintf(pct, sizeof pct, "%.3g", lost / given * 100.0);
+      out.warnings.push_back(c.file + ": " + l.field + ": " +
+                             (lost >= given ? std::string("all") : std::string(pct) + " %") +
+                             " of the load falls on held components (the anchors take it) or on nodes no tet uses, "
+                             "and is not applied");
     }
   }
   for (const Vec3& f : out.forces) out.total_load += f;

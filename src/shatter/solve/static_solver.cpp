@@ -172,6 +172,7 @@ struct StaticSolver::SolveState {
   std::vector<Vec3> x_initial;      ///< x as passed in, m (#nodes)
   std::vector<Vec3> load;           ///< full external load per node, N (#nodes)
   double reference = 0;             ///< what relative residuals divide by, N
+  bool load_reference = false;      ///< reference is the external load (not an anchor imbalance)
   Eigen::VectorXd r;                ///< residual s f_ext - F(x), N (3 #active nodes; 0 on held components)
   Eigen::VectorXd dx;               ///< Newton step, m (3 #active nodes)
   double round_off = 0;             ///< estimated round-off in ||r|| at the last residual evaluation, N
@@ -286,6 +287,7 @@ std::optional<StaticSolver::Outcome> StaticSolver::set_reference(SolveState& st)
   }
   st.reference = std::sqrt(reference);
   if (!std::isfinite(st.reference)) return Outcome{SolveStatus::invalid_input, "external load is not finite"};
+  st.load_reference = st.reference != 0;
   if (st.reference != 0) return std::nullopt;
   st.set_anchors(1.0);
   st.reference = residual(st, 0.0);
@@ -336,7 +338,16 @@ StaticSolver::Outcome StaticSolver::newton_load_step(SolveState& st, double s) {
     // Round-off level: the residual is within the bound on its own evaluation error and the last
     // Newton step no longer reduced it. No further step can do better in double precision (the
     // positions carry small displacements of stiff bodies only to ~eps |x|).
-    if (rel <= st.round_off / st.reference && rel > 0.5 * previous_rel) return {};
+    if (rel <= st.round_off / st.reference && rel > 0.5 * previous_rel) {
+      // Only a load can be missed: with none, the reference is itself an imbalance of round-off
+      // size (a body at rest) and a relative residual near 1 is the right answer.
+      if (rel <= options_.max_round_off_residual || !st.load_reference) return {};
+      return {SolveStatus::no_convergence,
+              "the residual stalls at its round-off level, relative residual " + format_number(rel) + " (above " +
+                  format_number(options_.max_round_off_residual) +
+                  "): double precision cannot resolve the displacements at these coordinates (move the mesh "
+                  "near the origin)"};
+    }
     if (it == options_.max_newton_iterations)
       return {SolveStatus::no_convergence, "no convergence in " + std::to_string(it) +
                                                " Newton iterations (relative residual " + format_number(rel) + ")"};

@@ -49,8 +49,9 @@ MeshFormat mesh_format_from_path(const std::string& path);
 
 /// Options of the mesh writers.
 struct MeshWriteOptions {
-  bool binary = false;  ///< msh / vtk / vtu: binary payload (vtu: base64 inline)
-  MeshFields fields;    ///< written where the format can hold them (vtu, vtk)
+  bool binary = false;    ///< msh / vtk / vtu: binary payload (vtu: base64 inline)
+  bool compress = false;  ///< vtu only: zlib-compressed base64 arrays (vtkZLibDataCompressor; implies binary)
+  MeshFields fields;      ///< written where the format can hold them (vtu, vtk)
 };
 
 /// Options of read_mesh.
@@ -63,7 +64,7 @@ struct ReadMeshOptions {
 /// Read any supported volume format.
 Result<MeshReadResult> read_mesh(const std::string& path, const ReadMeshOptions& options = {});
 /// Write any supported volume format by extension, atomically. For TetGen, `path` may end in
-/// .node or .ele; both files are written.
+/// .node or .ele; both files are written, and replaced together or not at all.
 Result<void> write_mesh(const std::string& path, const TetMesh& mesh, const MeshWriteOptions& options = {});
 
 // --- Per-format parsers (bytes in memory; `name` is used in error messages; not validated: read_mesh does that). ---
@@ -71,7 +72,7 @@ Result<void> write_mesh(const std::string& path, const TetMesh& mesh, const Mesh
 Result<MeshReadResult> parse_msh(std::string_view bytes, const std::string& name);
 /// Legacy VTK .vtk (UNSTRUCTURED_GRID, 4.2 / 5.1), ASCII or binary.
 Result<MeshReadResult> parse_vtk(std::string_view bytes, const std::string& name);
-/// VTK XML .vtu, ASCII or inline base64.
+/// VTK XML .vtu: ASCII, inline base64 or appended (raw or base64), each uncompressed or zlib-compressed.
 Result<MeshReadResult> parse_vtu(std::string_view bytes, const std::string& name);
 /// MEDIT ASCII .mesh.
 Result<MeshReadResult> parse_medit(std::string_view bytes, const std::string& name);
@@ -86,7 +87,7 @@ Result<MeshReadResult> parse_tetgen(std::string_view node_bytes, const std::stri
 Result<void> write_msh(std::ostream& out, const TetMesh& mesh, const MeshWriteOptions& options = {});
 /// Legacy VTK 4.2, ASCII or binary, with ids, tags and the fields.
 Result<void> write_vtk(std::ostream& out, const TetMesh& mesh, const MeshWriteOptions& options = {});
-/// VTK XML .vtu, ASCII or inline base64, with ids, tags and the fields.
+/// VTK XML .vtu, ASCII or inline base64 (zlib-compressed with options.compress), with ids, tags and the fields.
 Result<void> write_vtu(std::ostream& out, const TetMesh& mesh, const MeshWriteOptions& options = {});
 /// MEDIT ASCII .mesh.
 Result<void> write_medit(std::ostream& out, const TetMesh& mesh);

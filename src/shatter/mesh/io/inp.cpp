@@ -264,11 +264,24 @@ class InpReader {
       any_quadratic |= r.quadratic;
       m.tets.push_back(t);
     }
-    // Sets, in file order (a set may name earlier sets).
+    // Sets, in file order (a set may name earlier sets). Each set is kept free of repeats after its
+    // block, so no set outgrows the nodes or elements defined; and all the members added together
+    // are bounded, so a short file of sets that each name the previous one many times cannot ask
+    // for unbounded time or memory.
+    const std::uint64_t max_set_entries =
+        kSetEntriesPerItem * (static_cast<std::uint64_t>(n) + raw_tets_.size() + skipped_ids_.size()) + kSetEntriesMin;
     for (const SetBlock& s : sets_) {
       std::vector<Index>& target = s.nodes ? node_set(s.name) : tet_set(s.name);
       const IdLookup lookup = s.nodes ? IdLookup{&node_index_, nullptr} : IdLookup{&tet_index_, &skipped_ids_};
       const std::size_t defined = s.nodes ? n : raw_tets_.size() + skipped_ids_.size();
+      auto count_entries = [&](std::uint64_t added, std::int64_t line) -> Result<void> {
+        set_entries_ += added;
+        if (set_entries_ > max_set_entries)
+          return c_.error_at(line, "*NSET / *ELSET lists add up to more than " + std::to_string(max_set_entries) +
+                                       " members (" + std::to_string(kSetEntriesPerItem) +
+                                       " per node and element defined): sets naming sets too many times");
+        return {};
+      };
       for (const SetBlock::Item& item : s.items) {
         if (s.generate) {
           if (item.fields.size() < 2 || item.fields.size() > 3)
@@ -289,6 +302,7 @@ class InpReader {
             return c_.error_at(item.line, "GENERATE range of " + std::to_string(count) + " ids is larger than the " +
                                               std::to_string(defined) + (s.nodes ? " nodes" : " elements") +
                                               " defined");
+          SHATTER_TRY(counted, count_entries(count, item.line));
           for (std::uint64_t k = 0; k < count; ++k) {
             SHATTER_TRY(ok, add_id(target, lookup, *first + static_cast<std::int64_t>(k) * inc, item.line, s.nodes));
           }
@@ -298,6 +312,7 @@ class InpReader {
           if (f.empty()) continue;
           std::int64_t id = 0;
           if (io::parse_int(f, id)) {
+            SHATTER_TRY(counted, count_entries(1, item.line));
             SHATTER_TRY(ok, add_id(target, lookup, id, item.line, s.nodes));
             continue;
           }
@@ -309,11 +324,14 @@ class InpReader {
                                               " number or set name, found " + io::quote_token(f));
           const std::vector<Index>& other = s.nodes ? m.node_sets[it->second] : m.tet_sets[it->second];
           if (&other != &target) {
+            SHATTER_TRY(counted, count_entries(other.size(), item.line));
             const std::vector<Index> copy = other;
             target.insert(target.end(), copy.begin(), copy.end());
           }
         }
       }
+      std::sort(target.begin(), target.end());
+      target.erase(std::unique(target.begin(), target.end()), target.end());
     }
     for (auto* sets : {&m.node_sets, &m.tet_sets})
       for (auto& [name, v] : *sets) {
@@ -369,6 +387,10 @@ class InpReader {
   std::map<std::string, std::string> node_names_, tet_names_;
   std::map<std::string, std::size_t> skipped_elements_, skipped_keywords_;
   std::size_t skipped_set_members_ = 0;
+  std::uint64_t set_entries_ = 0;  ///< members added to sets so far (ids, GENERATE ranges, named sets)
+  /// Bound on set_entries_: this many per node and element defined, plus a floor for small meshes.
+  static constexpr std::uint64_t kSetEntriesPerItem = 64;
+  static constexpr std::uint64_t kSetEntriesMin = 1'000'000;
 };
 
 Result<void> check_set_name(const std::string& name) {

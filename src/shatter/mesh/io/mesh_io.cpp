@@ -1,5 +1,6 @@
 // Volume mesh reading and writing by file extension: read the bytes, parse, validate and repair;
-// write through a temporary file so a failure never leaves half a mesh.
+// write through a temporary file so a failure never leaves half a mesh (TetGen's two files are
+// replaced together).
 #include "shatter/mesh/io/mesh_io.h"
 
 #include <ostream>
@@ -69,8 +70,11 @@ Result<void> write_mesh(const std::string& path, const TetMesh& mesh, const Mesh
       const bool is_ele = file_extension(path) == ".ele";
       const std::string node_path = is_ele ? tetgen_sibling(path, false) : path;
       const std::string ele_path = is_ele ? path : tetgen_sibling(path, true);
+      // Both files or neither: a new .node beside an old .ele would be a different mesh.
+      OutputBatch batch;
       SHATTER_TRY(a, write_file_atomic(node_path, [&](std::ostream& out) { return write_tetgen_node(out, mesh); }));
-      return write_file_atomic(ele_path, [&](std::ostream& out) { return write_tetgen_ele(out, mesh); });
+      SHATTER_TRY(b, write_file_atomic(ele_path, [&](std::ostream& out) { return write_tetgen_ele(out, mesh); }));
+      return batch.commit();
     }
     case MeshFormat::msh:
       return write_file_atomic(path, [&](std::ostream& out) { return write_msh(out, mesh, options); });

@@ -20,6 +20,16 @@ namespace {
 using io::ByteCursor;
 using io::TextCursor;
 
+// A binary MSH 4.1 tag (size_t in the file) as a file id: above the largest int64 it would wrap to
+// a negative id ("node id -1" for 2^64 - 1), so it is refused, naming the value.
+Result<FileId> read_tag(ByteCursor& b, const char* what) {
+  SHATTER_TRY(v, b.u64(what));
+  if (*v > static_cast<std::uint64_t>(std::numeric_limits<FileId>::max()))
+    return b.error(std::string(what) + " " + std::to_string(*v) + " is larger than the largest id " +
+                   std::to_string(std::numeric_limits<FileId>::max()));
+  return static_cast<FileId>(*v);
+}
+
 constexpr std::int64_t kMaxIndex = std::numeric_limits<Index>::max();
 
 struct GmshType {
@@ -381,8 +391,8 @@ class MshReader {
         if (auto r = b.require(*n, 8 + 8 * ncoord, "nodes in block"); !r) return r;
         const std::size_t first = node_tags_.size();
         for (std::uint64_t i = 0; i < *n; ++i) {
-          SHATTER_TRY(tag, b.u64("node tag"));
-          node_tags_.push_back(static_cast<FileId>(*tag));
+          SHATTER_TRY(tag, read_tag(b, "node tag"));
+          node_tags_.push_back(*tag);
         }
         for (std::uint64_t i = 0; i < *n; ++i) {
           double xyz[3];
@@ -560,16 +570,13 @@ class MshReader {
         } else {
           const std::int32_t phys = block_physical(*dim, *etag);
           for (std::uint64_t i = 0; i < *n; ++i) {
-            SHATTER_TRY(id, b.u64("element tag"));
+            SHATTER_TRY(id, read_tag(b, "element tag"));
             FileId nodes[4];
             for (auto& v : nodes) {
-              SHATTER_TRY(x, b.u64("node tag"));
-              v = static_cast<FileId>(*x);
+              SHATTER_TRY(x, read_tag(b, "node tag"));
+              v = *x;
             }
-            if (auto r =
-                    add_tet(static_cast<FileId>(*id), nodes, phys, [&](const std::string& m) { return b.error(m); });
-                !r)
-              return r;
+            if (auto r = add_tet(*id, nodes, phys, [&](const std::string& m) { return b.error(m); }); !r) return r;
           }
         }
         done += *n;

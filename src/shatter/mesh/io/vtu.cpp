@@ -1,16 +1,20 @@
 // VTK XML UnstructuredGrid (.vtu) writer and reader.
 // Written layout: version 1.0, LittleEndian, header_type UInt64; every array inline, either ascii
-// or base64 of (UInt64 byte count + data) as one stream. Points Float64 x3; Cells connectivity and
-// offsets Int64, types UInt8 (10); PointData node_id (Int64), node_tag (Int32); CellData tet_id
-// (Int64), tag (Int32); then the requested fields as Float64.
-// Read: ascii and inline base64 (UInt32 or UInt64 headers, either byte order), one Piece; non-tet
-// cells are counted in `skipped`. Compressed and appended data are refused with a clear error.
+// or base64 of (UInt64 byte count + data) as one stream, or (compress) zlib-compressed in blocks
+// (vtkZLibDataCompressor: the block header and the blocks as two base64 runs, as VTK writes).
+// Points Float64 x3; Cells connectivity and offsets Int64, types UInt8 (10); PointData node_id
+// (Int64), node_tag (Int32); CellData tet_id (Int64), tag (Int32); then the requested fields as
+// Float64.
+// Read: ascii, inline base64 and <AppendedData> (raw or base64 encoding, arrays found by their
+// offset), each uncompressed or zlib-compressed; UInt32 or UInt64 headers, either byte order; one
+// Piece; non-tet cells are counted in `skipped`.
 #include <bit>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <map>
 #include <ostream>
+#include <set>
 #include <type_traits>
 
 #include "shatter/mesh/io/base64.h"
@@ -18,6 +22,7 @@
 #include "shatter/mesh/io/mesh_io_util.h"
 #include "shatter/mesh/io/scalar_type.h"
 #include "shatter/mesh/io/text_cursor.h"
+#include "shatter/mesh/io/vtk_zlib.h"
 #include "shatter/mesh/io/xml_lite.h"
 
 namespace shatter {
@@ -36,10 +41,46 @@ class VtuReader {
     std::size_t p = bytes_.size() >= 3 && bytes_.substr(0, 3) == "\xEF\xBB\xBF" ? 3 : 0;
     while (p < bytes_.size() && (bytes_[p] == ' ' || bytes_[p] == '\n' || bytes_[p] == '\r' || bytes_[p] == '\t')) ++p;
     if (p >= bytes_.size()) return line_error(name_, 1, "empty file: expected a VTK XML file");
-    if (const std::size_t at = bytes_.find("<AppendedData"); at != std::string_view::npos)
-      return line_error(name_, io::line_of(bytes_, at),
-                        "VTU with AppendedData is not supported (write inline ascii or binary arrays)");
-    SHATTER_TRY(parsed, io::parse_xml(bytes_, name_));
+    // Appended data is raw bytes after a '_', not XML: parse the XML up to the end of the
+    // <AppendedData> start tag, closed by hand, and read the arrays from the bytes after the '_'.
+    // The text before is the file's own, so lines and offsets stay those of the file.
+    std::string xml_text;
+    std::string_view xml = bytes_;
+    if (const std::size_t at = bytes_.find("<AppendedData"); at != std::string_view::npos) {
+      const std::size_t gt = bytes_.find('>', at);
+      if (gt == std::string_view::npos)
+        return line_error(name_, io::line_of(bytes_, at), "file ends inside the <AppendedData> tag");
+      std::size_t q = gt + 1;
+      while (q < bytes_.size() && (bytes_[q] == ' ' || bytes_[q] == '\n' || bytes_[q] == '\r' || bytes_[q] == '\t'))
+        ++q;
+      if (bytes_[gt - 1] == '/' || q >= bytes_.size() || bytes_[q] != '_')
+        return line_error(name_, io::line_of(bytes_, at), "expected '_' to start the data of <AppendedData>");
+      const std::size_t end = bytes_.rfind("</AppendedData>");
+      if (end == std::string_view::npos || end <= q)
+        return line_error(name_, io::line_of(bytes_, at),
+                          "no </AppendedData> after the appended data (file truncated?)");
+      // Only </VTKFile> may follow (anything else: a truncated or spliced file).
+      std::size_t tail = end + std::string_view("</AppendedData>").size();
+      auto skip_blank = [&] {
+        while (tail < bytes_.size() &&
+               (bytes_[tail] == ' ' || bytes_[tail] == '\n' || bytes_[tail] == '\r' || bytes_[tail] == '\t'))
+          ++tail;
+      };
+      skip_blank();
+      const bool closed = bytes_.substr(tail, 10) == "</VTKFile>";
+      tail += 10;
+      skip_blank();
+      if (!closed || tail < bytes_.size())
+        return line_error(name_, io::line_of(bytes_, end),
+                          "expected </VTKFile> and the end of the file after </AppendedData> (file truncated?)");
+      appended_ = bytes_.substr(q + 1, end - q - 1);
+      appended_begin_ = q + 1;
+      xml_text.assign(bytes_.substr(0, gt + 1));
+      xml_text += "</AppendedData></VTKFile>";
+      xml = xml_text;
+      has_appended_ = true;
+    }
+    SHATTER_TRY(parsed, io::parse_xml(xml, name_));
     doc_ = std::move(*parsed);
     const XmlElement& root = doc_.elements[0];
     if (root.name != "VTKFile")
@@ -48,8 +89,11 @@ class VtuReader {
     if (!type || *type != "UnstructuredGrid")
       return err(root,
                  "expected VTKFile type=\"UnstructuredGrid\", found " + io::quote_token(type ? *type : std::string()));
-    if (const std::string* c = root.attribute("compressor"); c && !c->empty())
-      return err(root, "compressed VTU not supported (" + *c + ")");
+    if (const std::string* c = root.attribute("compressor"); c && !c->empty()) {
+      if (*c != "vtkZLibDataCompressor")
+        return err(root, "compressor " + io::quote_token(*c) + " is not supported (only vtkZLibDataCompressor)");
+      compressed_ = true;
+    }
     if (const std::string* bo = root.attribute("byte_order")) {
       if (*bo == "BigEndian")
         big_endian_ = true;
@@ -69,12 +113,46 @@ class VtuReader {
       return err(doc_.elements[static_cast<std::size_t>(grids[0])], "no <Piece> in <UnstructuredGrid>");
     if (pieces.size() > 1)
       return err(doc_.elements[static_cast<std::size_t>(pieces[1])], "only one <Piece> is supported");
+    if (has_appended_) {
+      const std::vector<int> app = doc_.children(0, "AppendedData");
+      if (app.size() != 1) return err(root, "<AppendedData> must be a child of <VTKFile>");
+      const XmlElement& a = doc_.elements[static_cast<std::size_t>(app[0])];
+      const std::string* enc = a.attribute("encoding");
+      if (!enc || (*enc != "raw" && *enc != "base64"))
+        return err(a, "expected <AppendedData encoding=\"raw\"> or \"base64\", found " +
+                          io::quote_token(enc ? *enc : std::string()));
+      appended_base64_ = *enc == "base64";
+      // Where each appended array ends (base64 runs have no length of their own): the next offset.
+      for (const XmlElement& e : doc_.elements)
+        if (const std::string* f = e.attribute("format"); e.name == "DataArray" && f && *f == "appended") {
+          SHATTER_TRY(o, appended_offset(e));
+          offsets_.insert(*o);
+        }
+    }
     return read_piece(pieces[0]);
   }
 
  private:
   Error err(const XmlElement& e, const std::string& msg) const {
     return line_error(name_, io::line_of(bytes_, e.offset), msg);
+  }
+
+  /// "DataArray "Points" (line 12)" for messages about one array's data.
+  std::string label(const XmlElement& e) const {
+    const std::string* n = e.attribute("Name");
+    return "DataArray " + io::quote_token(n ? *n : std::string()) + " (line " +
+           std::to_string(io::line_of(bytes_, e.offset)) + ")";
+  }
+
+  /// The `offset` attribute of an appended DataArray, inside the appended data.
+  Result<std::uint64_t> appended_offset(const XmlElement& e) const {
+    const std::string* s = e.attribute("offset");
+    std::int64_t v = 0;
+    if (!s || !io::parse_int(*s, v)) return err(e, "appended DataArray needs an integer attribute offset");
+    if (v < 0 || static_cast<std::uint64_t>(v) >= appended_.size())
+      return err(e, "offset " + std::to_string(v) + " is outside the " + std::to_string(appended_.size()) +
+                        " bytes of appended data");
+    return static_cast<std::uint64_t>(v);
   }
 
   Result<std::int64_t> count_attribute(const XmlElement& e, const char* attr) {
@@ -95,8 +173,8 @@ class VtuReader {
   /// The DataArray children of `parent`.
   std::vector<int> arrays(int parent) { return doc_.children(parent, "DataArray"); }
 
-  /// Decode a DataArray of `count` values (tuples x components); keep == false only checks it.
-  Result<ScalarArray> read_array(const XmlElement& e, std::int64_t tuples, int expected_components, bool keep) {
+  /// Decode a DataArray of `count` values (tuples x components).
+  Result<ScalarArray> read_array(const XmlElement& e, std::int64_t tuples, int expected_components) {
     const std::string* tname = e.attribute("type");
     const auto type = tname ? io::scalar_type_from_name(io::ScalarNames::vtu, *tname) : std::nullopt;
     if (!type)
@@ -112,13 +190,14 @@ class VtuReader {
     const std::uint64_t count = static_cast<std::uint64_t>(tuples) * static_cast<std::uint64_t>(comps);
     const std::string* fmt = e.attribute("format");
     const std::string format = fmt ? *fmt : "ascii";
-    const std::string_view content = bytes_.substr(e.content_begin, e.content_end - e.content_begin);
+    // The data is the text before any child element (VTK puts <InformationKey> elements after it).
+    std::string_view content = bytes_.substr(e.content_begin, e.content_end - e.content_begin);
+    content = content.substr(0, content.find('<'));
     ScalarArray v;
     v.integral = !io::is_float(t);
     if (format == "ascii") {
       if (count > content.size() / 2 + 1)
         return err(e, "DataArray holds fewer values than the " + std::to_string(count) + " expected");
-      if (!keep) return v;
       // Lines inside the content count from the DataArray's line.
       io::TextCursor c(content, name_);
       auto fail = [&](Error error) {
@@ -141,35 +220,71 @@ class VtuReader {
         return fail(c.error("DataArray holds more than the " + std::to_string(count) + " values expected"));
       return v;
     }
-    if (format == "appended") return err(e, "appended VTU data is not supported");
-    if (format != "binary") return err(e, "unknown DataArray format " + io::quote_token(format));
-    std::string raw;
-    std::size_t bad = 0;
-    if (!io::base64_decode(content, raw, bad))
-      return line_error(name_, io::line_of(bytes_, e.content_begin + bad), "invalid base64 in DataArray");
-    io::ByteCursor b(raw, name_ + " (decoded DataArray at line " + std::to_string(io::line_of(bytes_, e.offset)) + ")",
-                     0, big_endian_);
-    std::uint64_t nbytes = 0;
-    if (header_size_ == 8) {
-      SHATTER_TRY(h, b.u64("array byte count"));
-      nbytes = *h;
-    } else {
-      SHATTER_TRY(h, b.u32("array byte count"));
-      nbytes = *h;
-    }
+    if (format != "binary" && format != "appended")
+      return err(e, "unknown DataArray format " + io::quote_token(format));
     const std::size_t size = io::scalar_size(t);
-    if (auto r = b.require(count, size, "array values"); !r) return r.error();
-    if (nbytes != count * size)
-      return err(
-          e, "DataArray header says " + std::to_string(nbytes) + " bytes, expected " + std::to_string(count * size));
-    if (!keep) return v;
+    if (count > std::numeric_limits<std::uint64_t>::max() / size)
+      return err(e, label(e) + ": " + std::to_string(count) + " values are too many");
+    const std::uint64_t expected_bytes = count * size;
+    // The array's bytes, from its header on: decoded base64 (inline, or appended base64) or the
+    // file's own bytes (appended raw).
+    std::string decoded;
+    std::string_view data;
+    std::size_t start = 0;
+    std::string where = name_;
+    if (format == "appended") {
+      if (!has_appended_) return err(e, label(e) + " is format=\"appended\" but the file has no <AppendedData>");
+      SHATTER_TRY(offset, appended_offset(e));
+      if (appended_base64_) {
+        // This array's base64 text runs to the next array's offset.
+        const auto next = offsets_.upper_bound(*offset);
+        const std::uint64_t end = next == offsets_.end() ? appended_.size() : *next;
+        const std::string_view text = appended_.substr(*offset, end - *offset);
+        std::size_t bad = 0;
+        if (!io::base64_decode(text, decoded, bad))
+          return offset_error(name_, static_cast<std::int64_t>(appended_begin_ + *offset + bad),
+                              label(e) + ": invalid base64 in the appended data");
+        data = decoded;
+        where = name_ + " (decoded appended " + label(e) + ")";
+      } else {
+        // Raw: offsets in errors are those of the file.
+        data = bytes_.substr(0, appended_begin_ + appended_.size());
+        start = appended_begin_ + *offset;
+      }
+    } else {
+      std::size_t bad = 0;
+      if (!io::base64_decode(content, decoded, bad))
+        return line_error(name_, io::line_of(bytes_, e.content_begin + bad), "invalid base64 in " + label(e));
+      data = decoded;
+      where = name_ + " (decoded " + label(e) + ")";
+    }
+    io::ByteCursor b(data, where, start, big_endian_);
+    std::string expanded;
+    if (compressed_) {
+      SHATTER_TRY(x, io::vtk_zlib_decompress(b, header_size_, expected_bytes, label(e)));
+      expanded = std::move(*x);
+      b = io::ByteCursor(expanded, name_ + " (uncompressed " + label(e) + ")", 0, big_endian_);
+    } else {
+      std::uint64_t nbytes = 0;
+      if (header_size_ == 8) {
+        SHATTER_TRY(h, b.u64("array byte count"));
+        nbytes = *h;
+      } else {
+        SHATTER_TRY(h, b.u32("array byte count"));
+        nbytes = *h;
+      }
+      if (auto r = b.require(count, size, "array values"); !r) return r.error();
+      if (nbytes != expected_bytes)
+        return err(e, "DataArray header says " + std::to_string(nbytes) + " bytes, expected " +
+                          std::to_string(expected_bytes));
+    }
     v.reserve(count);
     SHATTER_TRY(ok, io::read_scalars(b, t, count, "value", v));
     return v;
   }
 
   Result<std::vector<std::int64_t>> integer_array(const XmlElement& e, std::int64_t tuples) {
-    SHATTER_TRY(v, read_array(e, tuples, 1, true));
+    SHATTER_TRY(v, read_array(e, tuples, 1));
     if (v->integral) return std::move(v->ints);
     std::vector<std::int64_t> r;
     r.reserve(v->reals.size());
@@ -200,10 +315,13 @@ class VtuReader {
     const std::vector<int> parr = arrays(points[0]);
     if (parr.empty()) return err(doc_.elements[static_cast<std::size_t>(points[0])], "<Points> has no DataArray");
     const XmlElement& pa = doc_.elements[static_cast<std::size_t>(parr[0])];
-    SHATTER_TRY(pv, read_array(pa, *np, 3, true));
+    SHATTER_TRY(pv, read_array(pa, *np, 3));
     MeshReadResult out;
-    out.format =
-        std::string("vtu ") + (pa.attribute("format") && *pa.attribute("format") == "binary" ? "binary" : "ascii");
+    // "vtu ascii", "vtu binary", "vtu binary zlib", "vtu appended raw zlib", ...: as the points are stored.
+    const std::string* pfmt = pa.attribute("format");
+    const std::string pf = pfmt ? *pfmt : "ascii";
+    out.format = "vtu " + (pf == "appended" ? std::string(appended_base64_ ? "appended base64" : "appended raw") : pf) +
+                 (compressed_ && pf != "ascii" ? " zlib" : "");
     TetMesh& m = out.mesh;
     m.positions.resize(static_cast<std::size_t>(*np));
     for (std::int64_t i = 0; i < *np; ++i)
@@ -305,12 +423,19 @@ class VtuReader {
   XmlDocument doc_;
   bool big_endian_ = false;
   int header_size_ = 4;
+  bool compressed_ = false;          ///< compressor="vtkZLibDataCompressor"
+  bool has_appended_ = false;        ///< the file has <AppendedData>
+  bool appended_base64_ = false;     ///< its encoding is base64 (else raw)
+  std::string_view appended_;        ///< the bytes after its '_', up to </AppendedData>
+  std::size_t appended_begin_ = 0;   ///< where appended_ starts in the file
+  std::set<std::uint64_t> offsets_;  ///< the offsets of every appended DataArray
 };
 
 /// Writes DataArrays in the chosen layout.
 class ArrayWriter {
  public:
-  ArrayWriter(io::WriteBuffer& w, bool binary) : w_(w), binary_(binary) {}
+  ArrayWriter(io::WriteBuffer& w, bool binary, bool compress)
+      : w_(w), binary_(binary || compress), compress_(compress) {}
 
   template <class T, class Get>
   void write(std::string_view indent, const char* type, std::string_view name, int components, std::size_t count,
@@ -325,14 +450,23 @@ class ArrayWriter {
     if (binary_) {
       std::string raw;
       const std::uint64_t nbytes = count * sizeof(T);
-      raw.resize(8 + nbytes);
-      std::memcpy(raw.data(), &nbytes, 8);
+      const std::size_t at = compress_ ? 0 : 8;  // uncompressed: the byte count leads the data
+      raw.resize(at + nbytes);
+      if (!compress_) std::memcpy(raw.data(), &nbytes, 8);
       for (std::size_t i = 0; i < count; ++i) {
         const T v = get(i);
-        std::memcpy(raw.data() + 8 + i * sizeof(T), &v, sizeof(T));
+        std::memcpy(raw.data() + at + i * sizeof(T), &v, sizeof(T));
       }
       std::string text;
-      io::base64_encode(raw, text);
+      if (compress_) {
+        // VTK's layout: the block header and the blocks as two separate base64 runs.
+        std::string header, blocks;
+        io::vtk_zlib_compress(raw, kCompressBlockSize, header, blocks);
+        io::base64_encode(header, text);
+        io::base64_encode(blocks, text);
+      } else {
+        io::base64_encode(raw, text);
+      }
       w_ << text;
     } else {
       for (std::size_t i = 0; i < count; ++i) {
@@ -348,8 +482,11 @@ class ArrayWriter {
   }
 
  private:
+  /// Uncompressed bytes per zlib block (VTK's default).
+  static constexpr std::size_t kCompressBlockSize = 32768;
   io::WriteBuffer& w_;
   bool binary_;
+  bool compress_;
 };
 
 }  // namespace
@@ -365,10 +502,12 @@ Result<void> write_vtu(std::ostream& out, const TetMesh& mesh, const MeshWriteOp
   if (auto ok = io::check_mesh_for_writing("write_vtu", mesh, options); !ok) return ok;
 
   io::WriteBuffer w(out);
-  ArrayWriter a(w, options.binary);
+  ArrayWriter a(w, options.binary, options.compress);
   const std::string_view in = "        ";
   w << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
-       "header_type=\"UInt64\">\n";
+       "header_type=\"UInt64\"";
+  if (options.compress) w << " compressor=\"vtkZLibDataCompressor\"";
+  w << ">\n";
   w << "  <UnstructuredGrid>\n    <Piece NumberOfPoints=\"";
   w.integer(nn);
   w << "\" NumberOfCells=\"";
