@@ -217,7 +217,7 @@ class World {
     BodyId a, b;
   };
 
-  BodyId add(Body body);
+  BodyId add(const BodyDef& def, std::shared_ptr<const Shape> shape, std::shared_ptr<const BodyModel> model = {});
   [[nodiscard]] double motion_bound(const Body& b) const;
   void find_pairs(std::vector<PairRef>& pairs);
   void narrow_phase(const std::vector<PairRef>& pairs);

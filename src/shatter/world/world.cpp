@@ -74,8 +74,18 @@ void insert_pair(std::vector<std::array<BodyId, 2>>& sorted, BodyId a, BodyId b)
 
 World::World(const WorldSettings& settings) : settings_(settings) {}
 
-BodyId World::add(Body body) {
+BodyId World::add(const BodyDef& def, std::shared_ptr<const Shape> shape, std::shared_ptr<const BodyModel> model) {
+  Body body;
+  body.type = def.type;
+  body.model = std::move(model);
+  body.shape = std::move(shape);
+  if (def.type == BodyType::dynamic) body.inertia = rigid_inertia(body.model->mass);
+  body.rigid = def.rigid;
   body.rigid.orientation.normalize();
+  body.surface = def.surface;
+  body.filter = def.filter;
+  body.can_sleep = def.can_sleep;
+  body.awake = def.awake;
   if (body.type == BodyType::static_body) {
     body.rigid.linear_velocity.setZero();
     body.rigid.angular_velocity.setZero();
@@ -100,17 +110,7 @@ Result<BodyId> World::add_body(std::shared_ptr<const BodyModel> model, const Bod
     shape->local_bounds.extend(x);
     shape->radius = std::max(shape->radius, x.norm());
   }
-  Body body;
-  body.type = def.type;
-  body.model = std::move(model);
-  body.shape = std::move(shape);
-  if (def.type == BodyType::dynamic) body.inertia = rigid_inertia(body.model->mass);
-  body.rigid = def.rigid;
-  body.surface = def.surface;
-  body.filter = def.filter;
-  body.can_sleep = def.can_sleep;
-  body.awake = def.awake;
-  return add(std::move(body));
+  return add(def, std::move(shape), std::move(model));
 }
 
 Result<BodyId> World::add_hull(ConvexHull hull, const BodyDef& def) {
@@ -122,15 +122,7 @@ Result<BodyId> World::add_hull(ConvexHull hull, const BodyDef& def) {
   shape->local_bounds = hull.bounds;
   for (const Vec3& v : hull.vertices) shape->radius = std::max(shape->radius, v.norm());
   shape->pieces.push_back(std::move(hull));
-  Body body;
-  body.type = def.type;
-  body.shape = std::move(shape);
-  body.rigid = def.rigid;
-  body.surface = def.surface;
-  body.filter = def.filter;
-  body.can_sleep = def.can_sleep;
-  body.awake = def.awake;
-  return add(std::move(body));
+  return add(def, std::move(shape));
 }
 
 Result<BodyId> World::add_box(const Vec3& half_extents, const BodyDef& def) {
@@ -150,12 +142,7 @@ BodyId World::add_plane(const Plane& plane, const SurfaceMaterial& surface, cons
   shape->is_plane = true;
   shape->plane = plane;
   shape->plane.normal.normalize();
-  Body body;
-  body.type = BodyType::static_body;
-  body.shape = std::move(shape);
-  body.surface = surface;
-  body.filter = filter;
-  return add(std::move(body));
+  return add({.type = BodyType::static_body, .surface = surface, .filter = filter}, std::move(shape));
 }
 
 std::span<const ConvexHull> World::pieces(BodyId id) const { return bodies_[id].shape->pieces; }
@@ -302,7 +289,8 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
           const Transform& tbody = plane_first ? tb : ta;
           const Plane& plane = (plane_first ? a : b).shape->plane;
           if (tet_mode && !body.shape->tet.empty()) {
-            std::vector<PointContact> points;
+            thread_local std::vector<PointContact> points;  // scratch per worker thread
+            points.clear();
             collide_tet_shape_plane(body.shape->tet[0], tbody, plane, spec, points);
             if (plane_first)
               for (PointContact& p : points) p.normal = -p.normal;
@@ -318,20 +306,19 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
           return;
         }
         if (tet_mode && !a.shape->tet.empty() && !b.shape->tet.empty()) {
-          std::vector<PointContact> points;
+          thread_local std::vector<PointContact> points;  // scratch per worker thread
+          points.clear();
           collide_tet_shapes(a.shape->tet[0], ta, b.shape->tet[0], tb, spec, points);
           add_points(points);
           return;
         }
         const auto& pa = a.shape->pieces;
         const auto& pb = b.shape->pieces;
-        std::vector<Aabb> boxes_b(pb.size());
-        for (std::size_t j = 0; j < pb.size(); ++j) boxes_b[j] = grow(transform_box(pb[j].bounds, tb), spec);
         auto old_it = first_old;
         for (Index i = 0; i < static_cast<Index>(pa.size()); ++i) {
           const Aabb box_a = transform_box(pa[i].bounds, ta);
           for (Index j = 0; j < static_cast<Index>(pb.size()); ++j) {
-            if (!boxes_overlap(box_a, boxes_b[j])) continue;
+            if (!boxes_overlap(box_a, grow(transform_box(pb[j].bounds, tb), spec))) continue;
             SatCache sat;
             while (old_it != old_end && std::tie(old_it->piece_a, old_it->piece_b) < std::tie(i, j)) ++old_it;
             if (old_it != old_end && old_it->piece_a == i && old_it->piece_b == j) sat = old_it->sat;
