@@ -441,9 +441,10 @@ TEST(World, BadInputGivesErrors) {
   EXPECT_FALSE(w.add_body(nullptr, {}).ok());
   EXPECT_FALSE(w.add_box(Vec3(1, -1, 1), {.type = BodyType::static_body}).ok());
   EXPECT_FALSE(w.add_box(Vec3(1, 1, 1), {.type = BodyType::dynamic}).ok());
-  WorldSnapshot other;
-  other.bodies.resize(3);
-  EXPECT_FALSE(w.restore(other).ok());
+  EXPECT_FALSE(w.restore(WorldSnapshot{}).ok());
+  World v;
+  EXPECT_FALSE(w.restore(v.save()).ok());  // another world's
+  EXPECT_TRUE(w.restore(w.save()).ok());
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 // updates below: a plastic update in place, or a new model per fragment after a cut.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -32,6 +33,13 @@ struct BodyModel {
   TriSurface surface;   ///< boundary triangles (outward) over the boundary nodes
   FemModel fem;         ///< material, model kind, per-tet rest data, lumped node masses
   MassProperties mass;  ///< exact, about the centre of mass (the body-frame origin)
+  /// Per triangle of `surface`: 1 where the face was opened by a crack (the inside of the
+  /// material shows there), 0 on the original surface (#triangles).
+  std::vector<std::uint8_t> crack_face;
+  /// Where the body-frame origin lies in the coordinates of the mesh the body was first made
+  /// from, m: rest coordinates for solid textures are material_origin + r, the same in every
+  /// fragment of that body.
+  Vec3 material_origin = Vec3::Zero();
 };
 
 /// Rigid motion of a body (docs/method.md §2.7, eq. 23).
@@ -47,9 +55,9 @@ struct BodyState {
   RigidState rigid;                             ///< pose and velocities
   std::vector<double> plastic_strain;           ///< accumulated equivalent plastic strain (#tets)
   std::optional<StressHistory> stress_history;  ///< time-averaged stress (#tets), when used
-  /// Pattern and factorization kept between impacts (a cache: not copyable, so the state is
-  /// move-only; make_body_state creates it).
-  std::unique_ptr<StaticSolver> solver;
+  /// Pattern and factorization kept between impacts (a cache, shared by copies of the state;
+  /// make_body_state creates it, and an impact makes one when it is null).
+  std::shared_ptr<StaticSolver> solver;
 };
 
 /// Build a body from a rest mesh given in the world: the mesh is validated (no validate_mesh error,

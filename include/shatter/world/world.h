@@ -28,6 +28,7 @@
 #include "shatter/core/types.h"
 #include "shatter/rigid/body.h"
 #include "shatter/rigid/contact_solver.h"
+#include "shatter/rigid/impact.h"
 #include "shatter/rigid/integrate.h"
 
 namespace shatter {
@@ -69,6 +70,10 @@ struct BodyDef {
   CollisionFilter filter;
   bool can_sleep = true;
   bool awake = true;  ///< start awake (false: asleep until touched)
+  /// Impacts dent and break this body (dynamic tet bodies only); false: it stays as it is.
+  bool breakable = true;
+  /// Impact settings of this body (and of the fragments it breaks into); null: the world's.
+  std::shared_ptr<const ImpactSettings> impact;
 };
 
 /// Settings of a world.
@@ -92,6 +97,69 @@ struct WorldSettings {
   /// Results do not depend on them (nor on the thread count).
   std::int64_t parallel_min_pairs = 512;
   std::int64_t parallel_min_bodies = 2048;
+  /// Impact events (docs/impacts.md): a pair of bodies whose contacts first carry an impulse at an
+  /// approach speed of at least impact.min_approach_speed opens an event, which stays open until
+  /// the pair no longer touches. Each breakable body of a new event is analysed once
+  /// (analyze_impact) at the end of the step, and goes on dented, or is replaced by its fragments.
+  bool enable_impacts = true;
+  ImpactSettings impact;  ///< for bodies without their own
+  /// What planes, boxes and hulls are made of, for Hertz's effective modulus (stone).
+  Material obstacle_material{.name = "stone",
+                             .youngs_modulus = 30e9,
+                             .poisson_ratio = 0.2,
+                             .density = 2500,
+                             .tensile_strength = kInfinity,
+                             .yield_stress = kInfinity,
+                             .fracture_toughness = kInfinity};
+  /// Debris budget of the world: once it holds this many bodies (removed ones included, as ids
+  /// are never reused), impacts still dent bodies but no longer crack them.
+  Index max_bodies = 4096;
+};
+
+/// One impact analysis of one body (a row of StepEvents::impacts).
+struct ImpactRecord {
+  BodyId body = -1;       ///< the body analysed
+  BodyId other = -1;      ///< the body it hit (the lowest id when several events opened at once)
+  double time = 0;        ///< end of the step, s
+  Vec3 point = Vec3::Zero();  ///< impulse-weighted contact point, world, m
+  double approach_speed = 0;  ///< m/s
+  double impulse = 0;         ///< N s
+  double contact_time = 0;    ///< s
+  double force = 0;           ///< static load, N
+  double max_principal_stress = 0;  ///< Pa
+  double max_von_mises = 0;         ///< Pa
+  bool converged = false;           ///< the static solve converged
+  bool dented = false;              ///< the rest shape changed
+  Index cracks = 0;                 ///< cracks cut
+  Index fragments = 0;              ///< bodies it was replaced by (0: it goes on itself)
+  Index debris_count = 0;           ///< fragments removed as debris
+  double debris_mass = 0;           ///< kg
+  double solve_ms = 0;              ///< static solve, ms
+  double fracture_ms = 0;           ///< stresses, plasticity, cracks, children, ms
+};
+
+/// One crack (a row of StepEvents::cracks).
+struct CrackRecord {
+  BodyId body = -1;               ///< the body that cracked
+  Vec3 origin = Vec3::Zero();     ///< a point of the crack plane, world, m
+  Vec3 normal = Vec3::UnitX();    ///< the plane's normal, world
+  double radius = 0;              ///< r_frac, m
+  double stress = 0;              ///< largest principal stress at the origin, Pa
+};
+
+/// A body born from a fracture (a row of StepEvents::fragments).
+struct FragmentRecord {
+  BodyId parent = -1;  ///< removed body it came from
+  BodyId body = -1;    ///< the new body
+  double mass = 0;     ///< kg
+};
+
+/// What happened in the last step, in a deterministic order (by body id).
+struct StepEvents {
+  std::vector<ImpactRecord> impacts;
+  std::vector<CrackRecord> cracks;
+  std::vector<FragmentRecord> fragments;
+  std::vector<BodyId> removed;  ///< bodies replaced by their fragments
 };
 
 /// A contact between two bodies (one manifold), with what the solver did in the last step.
@@ -104,19 +172,7 @@ struct Contact {
   SatCache sat;                  ///< separating-axis cache of the piece pair
 };
 
-/// The complete changing state of a world (everything save() needs to resume bit for bit).
-struct WorldSnapshot {
-  struct Body {
-    RigidState rigid;
-    bool awake = true;
-    double sleep_time = 0;
-  };
-  std::vector<Body> bodies;
-  std::vector<Contact> contacts;
-  std::vector<std::array<BodyId, 2>> excluded;     ///< pairs that never touch
-  std::vector<std::array<BodyId, 2>> until_apart;  ///< pairs that touch only after first separating
-  std::int64_t step_count = 0;
-};
+class WorldSnapshot;
 
 /// Counts of the last step, for benchmarks and tests.
 struct StepStats {
@@ -128,6 +184,8 @@ struct StepStats {
   double broad_phase_ms = 0;  ///< wall time of each part
   double narrow_phase_ms = 0;
   double solver_ms = 0;
+  double impact_ms = 0;  ///< impact analyses and body replacement
+  std::int64_t impacts = 0;  ///< bodies analysed
 };
 
 class World {
@@ -164,6 +222,14 @@ class World {
   void apply_impulse(BodyId id, const Vec3& impulse, const Vec3& point);
   /// Wake a body (its island follows at the next step).
   void wake(BodyId id);
+  /// Whether the body was replaced by its fragments (it then takes no further part).
+  [[nodiscard]] bool removed(BodyId id) const { return bodies_[id].removed; }
+  /// The body a fragment broke from (-1 for bodies the user added).
+  [[nodiscard]] BodyId parent(BodyId id) const { return bodies_[id].parent; }
+  /// Accumulated plastic strain per tet of the body's current model (empty for planes and hulls).
+  [[nodiscard]] std::span<const double> plastic_strain(BodyId id) const { return bodies_[id].plastic_strain; }
+  /// Number of bodies not removed.
+  [[nodiscard]] Index live_body_count() const;
   /// A world box around the body at its pose: its body-frame box turned and boxed again, so not
   /// tight for a turned body (infinite for planes).
   [[nodiscard]] Aabb bounds(BodyId id) const;
@@ -177,24 +243,33 @@ class World {
   /// Contacts of the last step, sorted by (body_a, body_b, piece_a, piece_b).
   [[nodiscard]] std::span<const Contact> contacts() const { return contacts_; }
   [[nodiscard]] const StepStats& stats() const { return stats_; }
+  /// Impacts, cracks, fragments and removals of the last step.
+  [[nodiscard]] const StepEvents& events() const { return events_; }
   [[nodiscard]] const WorldSettings& settings() const { return settings_; }
   [[nodiscard]] std::int64_t step_count() const { return step_count_; }
   /// Simulated time, s.
   [[nodiscard]] double time() const { return static_cast<double>(step_count_) * settings_.time_step; }
 
   // State.
+  /// The whole changing state (bodies with their current models, contacts, exclusions, open
+  /// impact events); cheap: models and shapes are shared, not copied.
   [[nodiscard]] WorldSnapshot save() const;
-  /// Resume from a snapshot of this world (same bodies). Errors: a snapshot of another body set.
+  /// Resume from a snapshot of this world, taken before or after any number of fractures.
+  /// Errors: an empty snapshot or one of another world.
   Result<void> restore(const WorldSnapshot& snapshot);
-  /// xxHash64 of poses, velocities, sleep state, contact caches and exclusions.
+  /// xxHash64 of poses, velocities, sleep state, plastic strains, removals, contact caches,
+  /// exclusions and open impact events.
   [[nodiscard]] std::uint64_t state_hash() const;
 
   /// Total kinetic energy of the dynamic bodies, J.
   [[nodiscard]] double kinetic_energy() const;
 
+  struct State;  ///< what a snapshot holds (world.cpp)
+
  private:
   struct Shape {
     std::vector<ConvexHull> pieces;    ///< body frame
+    std::vector<std::vector<Index>> piece_tets;  ///< the tets each piece covers (tet bodies)
     std::vector<TetContactShape> tet;  ///< 0 or 1 (the paper's mode)
     bool is_plane = false;
     Plane plane;        ///< world
@@ -212,12 +287,25 @@ class World {
     bool can_sleep = true;
     bool awake = true;
     double sleep_time = 0;
+    bool removed = false;
+    bool breakable = true;
+    BodyId parent = -1;
+    std::shared_ptr<const ImpactSettings> impact;
+    std::vector<double> plastic_strain;     ///< per tet of model
+    std::shared_ptr<StaticSolver> solver;  ///< kept between impacts
   };
   struct PairRef {
     BodyId a, b;
   };
 
   BodyId add(const BodyDef& def, std::shared_ptr<const Shape> shape, std::shared_ptr<const BodyModel> model = {});
+  /// Convex pieces (and the paper's contact shape) of a tet model.
+  [[nodiscard]] Result<std::shared_ptr<const Shape>> make_tet_shape(const BodyModel& model) const;
+  /// The same pieces over the same tets of a model whose nodes moved (a dent).
+  [[nodiscard]] Result<std::shared_ptr<const Shape>> reshape(const Shape& old, const BodyModel& model) const;
+  void process_impacts();
+  /// Replace body id by the outcome of its impact analysis; records the events.
+  void apply_impact(BodyId id, BodyId other, ImpactResult& r);
   [[nodiscard]] double motion_bound(const Body& b) const;
   void find_pairs(std::vector<PairRef>& pairs);
   void narrow_phase(const std::vector<PairRef>& pairs);
@@ -231,8 +319,11 @@ class World {
   std::vector<Contact> contacts_;                   ///< sorted by key
   std::vector<std::array<BodyId, 2>> excluded_;     ///< sorted
   std::vector<std::array<BodyId, 2>> until_apart_;  ///< sorted
+  std::vector<std::array<BodyId, 2>> open_impacts_;  ///< pairs in an impact event, sorted
   std::int64_t step_count_ = 0;
+  std::uint64_t world_id_ = 0;  ///< tells this world's snapshots from others'
   StepStats stats_;
+  StepEvents events_;
   BroadPhase broad_phase_;
   // Scratch kept between steps.
   std::vector<Aabb> boxes_;
@@ -241,6 +332,17 @@ class World {
   std::vector<SolverBody> solver_bodies_;
   std::vector<Index> island_parent_;
   std::vector<Index> island_of_;
+};
+
+/// A saved world state (World::save); restore it into the world it came from.
+class WorldSnapshot {
+ public:
+  /// Whether it holds a state.
+  [[nodiscard]] bool empty() const { return !state_; }
+
+ private:
+  friend class World;
+  std::shared_ptr<const World::State> state_;
 };
 
 }  // namespace shatter

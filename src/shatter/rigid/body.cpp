@@ -28,6 +28,8 @@ Result<BodyModel> make_body_model(const TetMesh& world_mesh, const Material& mat
   b.surface = boundary_surface(b.mesh, b.faces);
   b.fem = make_fem_model(b.mesh, material, model);
   b.mass = mass_properties(b.mesh, material.density);
+  b.crack_face.assign(b.surface.triangles.size(), 0);
+  b.material_origin = world_mass.center;
   if (rigid) {
     *rigid = RigidState{};
     rigid->position = world_mass.center;
@@ -39,7 +41,7 @@ BodyState make_body_state(const BodyModel& model, const RigidState& rigid) {
   BodyState s;
   s.rigid = rigid;
   s.plastic_strain.assign(static_cast<std::size_t>(model.mesh.num_tets()), 0.0);
-  s.solver = std::make_unique<StaticSolver>();
+  s.solver = std::make_shared<StaticSolver>();
   return s;
 }
 
@@ -66,10 +68,12 @@ void apply_plastic_update(BodyModel& model, BodyState& state, const PlasticResul
   // moves, so every tet's rest data is recomputed (as make_fem_model would).
   const Vec3 dc = m.center;
   for (Vec3& p : model.mesh.positions) p -= dc;
+  model.material_origin += dc;
   state.rigid.position += state.rigid.orientation * dc;
   m.center = Vec3::Zero();
   model.mass = m;
   for (Index e = 0; e < model.mesh.num_tets(); ++e) set_tet_rest(model.fem, e, model.mesh.corners(e));
+  // Same faces in the same order: the crack flags stay valid.
   model.surface = boundary_surface(model.mesh, model.faces);
 }
 

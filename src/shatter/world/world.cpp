@@ -2,6 +2,7 @@
 #include "shatter/world/world.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -72,7 +73,21 @@ void insert_pair(std::vector<std::array<BodyId, 2>>& sorted, BodyId a, BodyId b)
 
 }  // namespace
 
-World::World(const WorldSettings& settings) : settings_(settings) {}
+/// Everything a snapshot holds.
+struct World::State {
+  std::uint64_t world_id = 0;
+  std::vector<Body> bodies;
+  std::vector<Contact> contacts;
+  std::vector<std::array<BodyId, 2>> excluded;
+  std::vector<std::array<BodyId, 2>> until_apart;
+  std::vector<std::array<BodyId, 2>> open_impacts;
+  std::int64_t step_count = 0;
+};
+
+World::World(const WorldSettings& settings) : settings_(settings) {
+  static std::atomic<std::uint64_t> next_id{1};
+  world_id_ = next_id.fetch_add(1);
+}
 
 BodyId World::add(const BodyDef& def, std::shared_ptr<const Shape> shape, std::shared_ptr<const BodyModel> model) {
   Body body;
@@ -86,6 +101,12 @@ BodyId World::add(const BodyDef& def, std::shared_ptr<const Shape> shape, std::s
   body.filter = def.filter;
   body.can_sleep = def.can_sleep;
   body.awake = def.awake;
+  body.breakable = def.breakable;
+  body.impact = def.impact;
+  if (body.model) {
+    body.plastic_strain.assign(body.model->mesh.tets.size(), 0.0);
+    body.solver = std::make_shared<StaticSolver>();
+  }
   if (body.type == BodyType::static_body) {
     body.rigid.linear_velocity.setZero();
     body.rigid.angular_velocity.setZero();
@@ -100,17 +121,53 @@ Result<BodyId> World::add_body(std::shared_ptr<const BodyModel> model, const Bod
   if (model->mesh.tets.empty()) return make_error("add_body: the body model has no tets");
   if (def.type == BodyType::dynamic && !(model->mass.mass > 0))
     return make_error("add_body: a dynamic body needs a positive mass (check the material density)");
+  auto shape = make_tet_shape(*model);
+  if (!shape) return make_error("add_body: " + shape.error().message);
+  return add(def, std::move(*shape), std::move(model));
+}
+
+Result<std::shared_ptr<const World::Shape>> World::make_tet_shape(const BodyModel& model) const {
   auto shape = std::make_shared<Shape>();
-  auto pieces = decompose_convex(model->mesh, model->faces, settings_.decomposition);
-  if (!pieces) return make_error("add_body: the convex pieces could not be built: " + pieces.error().message);
-  for (ConvexPiece& p : *pieces) shape->pieces.push_back(std::move(p.hull));
+  auto pieces = decompose_convex(model.mesh, model.faces, settings_.decomposition);
+  if (!pieces) return make_error("the convex pieces could not be built: " + pieces.error().message);
+  for (ConvexPiece& p : *pieces) {
+    shape->pieces.push_back(std::move(p.hull));
+    shape->piece_tets.push_back(std::move(p.tets));
+  }
   if (settings_.contact_mode == ContactMode::tet_vertices)
-    shape->tet.push_back(make_tet_contact_shape(model->mesh, model->faces));
-  for (const Vec3& x : model->mesh.positions) {
+    shape->tet.push_back(make_tet_contact_shape(model.mesh, model.faces));
+  for (const Vec3& x : model.mesh.positions) {
     shape->local_bounds.extend(x);
     shape->radius = std::max(shape->radius, x.norm());
   }
-  return add(def, std::move(shape), std::move(model));
+  return std::shared_ptr<const Shape>(std::move(shape));
+}
+
+Result<std::shared_ptr<const World::Shape>> World::reshape(const Shape& old, const BodyModel& model) const {
+  auto shape = std::make_shared<Shape>();
+  std::vector<Vec3> points;
+  std::vector<char> seen(model.mesh.positions.size(), 0);
+  for (const std::vector<Index>& tets : old.piece_tets) {
+    points.clear();
+    for (const Index e : tets)
+      for (const Index v : model.mesh.tets[e])
+        if (!seen[v]) {
+          seen[v] = 1;
+          points.push_back(model.mesh.positions[v]);
+        }
+    for (const Index e : tets)
+      for (const Index v : model.mesh.tets[e]) seen[v] = 0;
+    auto hull = build_convex_hull(points);
+    if (!hull) return make_error("a convex piece could not be rebuilt: " + hull.error().message);
+    shape->pieces.push_back(std::move(*hull));
+  }
+  shape->piece_tets = old.piece_tets;
+  if (!old.tet.empty()) shape->tet.push_back(make_tet_contact_shape(model.mesh, model.faces));
+  for (const Vec3& x : model.mesh.positions) {
+    shape->local_bounds.extend(x);
+    shape->radius = std::max(shape->radius, x.norm());
+  }
+  return std::shared_ptr<const Shape>(std::move(shape));
 }
 
 Result<BodyId> World::add_hull(ConvexHull hull, const BodyDef& def) {
@@ -149,6 +206,7 @@ std::span<const ConvexHull> World::pieces(BodyId id) const { return bodies_[id].
 
 void World::set_rigid_state(BodyId id, const RigidState& rigid) {
   Body& b = bodies_[id];
+  if (b.removed) return;
   b.rigid = rigid;
   b.rigid.orientation.normalize();
   if (b.type == BodyType::static_body) {
@@ -161,7 +219,7 @@ void World::set_rigid_state(BodyId id, const RigidState& rigid) {
 
 void World::apply_impulse(BodyId id, const Vec3& impulse, const Vec3& point) {
   Body& b = bodies_[id];
-  if (b.type != BodyType::dynamic) return;
+  if (b.type != BodyType::dynamic || b.removed) return;
   b.rigid.linear_velocity += b.inertia.inverse_mass * impulse;
   b.rigid.angular_velocity +=
       world_inverse_inertia(b.inertia, b.rigid.orientation) * (point - b.rigid.position).cross(impulse);
@@ -170,7 +228,7 @@ void World::apply_impulse(BodyId id, const Vec3& impulse, const Vec3& point) {
 
 void World::wake(BodyId id) {
   Body& b = bodies_[id];
-  if (b.type == BodyType::static_body) return;
+  if (b.type == BodyType::static_body || b.removed) return;
   b.awake = true;
   b.sleep_time = 0;
 }
@@ -203,7 +261,7 @@ void World::find_pairs(std::vector<PairRef>& pairs) {
   boxes_.resize(n);
   for (Index i = 0; i < n; ++i) {
     const Body& b = bodies_[i];
-    boxes_[i] = b.shape->is_plane ? Aabb{} : grow(bounds(i), half_margin + motion_bound(b));
+    boxes_[i] = b.shape->is_plane || b.removed ? Aabb{} : grow(bounds(i), half_margin + motion_bound(b));
   }
   pairs.clear();
   for (const BodyPair& p : broad_phase_.find_pairs(boxes_)) pairs.push_back({p.first, p.second});
@@ -532,8 +590,196 @@ void World::update_sleep() {
   }
 }
 
+void World::process_impacts() {
+  if (!settings_.enable_impacts) {
+    open_impacts_.clear();
+    return;
+  }
+  auto settings_of = [&](const Body& b) -> const ImpactSettings& { return b.impact ? *b.impact : settings_.impact; };
+  auto analysable = [](const Body& b) {
+    return b.type == BodyType::dynamic && b.model && b.breakable && !b.removed;
+  };
+  // Pairs touching this step (some point pushed or overlaps), and the new events among them.
+  std::vector<std::array<BodyId, 2>> touching;
+  std::vector<std::array<BodyId, 2>> opened;
+  for (std::size_t i = 0; i < contacts_.size();) {
+    std::size_t j = i;
+    double approach = 0;
+    bool touches = false;
+    while (j < contacts_.size() && contacts_[j].body_a == contacts_[i].body_a &&
+           contacts_[j].body_b == contacts_[i].body_b) {
+      const ContactConstraint& cc = contacts_[j].constraint;
+      for (int k = 0; k < cc.count; ++k) {
+        const ContactPoint& p = cc.points[k];
+        if (p.total_normal_impulse > 0) {
+          touches = true;
+          approach = std::max(approach, p.approach_speed);
+        }
+        if (p.separation <= 0) touches = true;
+      }
+      ++j;
+    }
+    const BodyId a = contacts_[i].body_a;
+    const BodyId b = contacts_[i].body_b;
+    i = j;
+    if (!touches) continue;
+    touching.push_back({a, b});
+    if (contains_pair(open_impacts_, a, b)) continue;
+    const double threshold =
+        std::min(settings_of(bodies_[a]).min_approach_speed, settings_of(bodies_[b]).min_approach_speed);
+    if (approach >= threshold && (analysable(bodies_[a]) || analysable(bodies_[b]))) opened.push_back({a, b});
+  }
+  // Events stay open while their pair touches.
+  std::vector<std::array<BodyId, 2>> still_open;
+  for (const auto& pr : touching)
+    if (contains_pair(open_impacts_, pr[0], pr[1]) || std::binary_search(opened.begin(), opened.end(), pr))
+      still_open.push_back(pr);
+  open_impacts_ = std::move(still_open);
+  if (opened.empty()) return;
+
+  // One analysis per body over the contacts of all its new events, by increasing body id.
+  std::vector<std::array<BodyId, 2>> work;  // (body, other)
+  for (const auto& pr : opened)
+    for (int side = 0; side < 2; ++side)
+      if (analysable(bodies_[pr[side]])) work.push_back({pr[side], pr[1 - side]});
+  std::sort(work.begin(), work.end());
+  for (std::size_t i = 0; i < work.size();) {
+    const BodyId id = work[i][0];
+    const BodyId first_other = work[i][1];
+    std::vector<ImpactContact> found;
+    double restitution = 0;
+    for (; i < work.size() && work[i][0] == id; ++i) {
+      const BodyId other = work[i][1];
+      const std::array<BodyId, 2> key{std::min(id, other), std::max(id, other)};
+      const bool is_b = id == key[1];
+      const Body& body = bodies_[id];
+      const Mat3 rotation = body.rigid.orientation.toRotationMatrix();
+      restitution = std::max(restitution, std::max(body.surface.restitution, bodies_[other].surface.restitution));
+      for (const Contact& c : contacts_) {
+        if (c.body_a != key[0] || c.body_b != key[1]) continue;
+        const ContactConstraint& cc = c.constraint;
+        for (int k = 0; k < cc.count; ++k) {
+          const ContactPoint& p = cc.points[k];
+          if (!(p.total_normal_impulse > 0)) continue;
+          // The point where it is on the body now, and the push on this body: the normal points
+          // from A to B, and the manifold point lies midway across the gap the step started with.
+          const Vec3 local = is_b ? p.local_anchor_b : p.local_anchor_a;
+          const Vec3 to_surface = (is_b ? 0.5 : -0.5) * std::max(p.separation, 0.0) * cc.normal;
+          found.push_back({.point = body.rigid.position + rotation * local + to_surface,
+                           .normal = is_b ? cc.normal : Vec3(-cc.normal),
+                           .normal_impulse = p.total_normal_impulse,
+                           .approach_speed = p.approach_speed});
+        }
+      }
+    }
+    Body& body = bodies_[id];
+    ImpactSettings settings = settings_of(body);
+    const Body& other = bodies_[first_other];
+    settings.other_material = other.model ? other.model->fem.material : settings_.obstacle_material;
+    settings.restitution = restitution;
+    if (body_count() >= settings_.max_bodies) settings.fracture.crack.max_cracks = 0;
+    BodyState state;
+    state.rigid = body.rigid;
+    state.plastic_strain = body.plastic_strain;
+    state.solver = body.solver;
+    auto result = analyze_impact(*body.model, state, found, settings);
+    if (!result || !result->analysed) continue;
+    ++stats_.impacts;
+    apply_impact(id, first_other, *result);
+  }
+  std::erase_if(contacts_, [&](const Contact& c) { return bodies_[c.body_a].removed || bodies_[c.body_b].removed; });
+}
+
+void World::apply_impact(BodyId id, BodyId other, ImpactResult& r) {
+  ImpactRecord rec;
+  rec.body = id;
+  rec.other = other;
+  rec.time = time();
+  rec.point = r.load_point;
+  rec.approach_speed = r.approach_speed;
+  rec.impulse = r.impulse;
+  rec.contact_time = r.contact_time;
+  rec.force = r.force;
+  rec.max_principal_stress = r.max_principal_stress;
+  rec.max_von_mises = r.max_von_mises;
+  rec.converged = r.solve.converged;
+  rec.dented = r.dented;
+  rec.cracks = static_cast<Index>(r.cracks.size());
+  rec.debris_count = r.debris_count;
+  rec.debris_mass = r.debris_mass;
+  rec.solve_ms = r.solve_ms;
+  rec.fracture_ms = r.fracture_ms;
+  {
+    const Body& body = bodies_[id];
+    const Mat3 rotation = body.rigid.orientation.toRotationMatrix();
+    for (const CrackEvent& c : r.cracks)
+      events_.cracks.push_back({.body = id,
+                                .origin = body.rigid.position + rotation * c.plan.origin,
+                                .normal = rotation * c.plan.normal,
+                                .radius = c.plan.radius,
+                                .stress = c.plan.stress});
+  }
+  if (r.children.empty()) {
+    bodies_[id].plastic_strain = std::move(r.plastic_strain);
+    events_.impacts.push_back(rec);
+    return;
+  }
+  if (r.children.size() == 1 && r.cracks.empty()) {
+    // Dented: the same tets, moved nodes; the pieces keep their tets.
+    Body& body = bodies_[id];
+    ImpactChild& child = r.children.front();
+    auto shape = reshape(*body.shape, *child.model);
+    if (shape) {
+      body.shape = std::move(*shape);
+      body.model = child.model;
+      body.inertia = rigid_inertia(child.model->mass);
+      body.rigid = child.rigid;
+      body.plastic_strain = std::move(child.plastic_strain);
+    }
+    events_.impacts.push_back(rec);
+    return;
+  }
+  // Cracked: the children replace the body (one child: cracked but whole).
+  const Body parent = bodies_[id];
+  std::vector<BodyId> born;
+  for (ImpactChild& child : r.children) {
+    auto shape = make_tet_shape(*child.model);
+    if (!shape) {
+      rec.debris_count += 1;
+      rec.debris_mass += child.model->mass.mass;
+      continue;
+    }
+    BodyDef def{.type = BodyType::dynamic,
+                .rigid = child.rigid,
+                .surface = parent.surface,
+                .filter = parent.filter,
+                .can_sleep = parent.can_sleep,
+                .awake = true,
+                .breakable = parent.breakable,
+                .impact = parent.impact};
+    const double mass = child.model->mass.mass;
+    const BodyId cid = add(def, std::move(*shape), std::move(child.model));
+    Body& b = bodies_[cid];
+    b.parent = id;
+    b.plastic_strain = std::move(child.plastic_strain);
+    born.push_back(cid);
+    events_.fragments.push_back({.parent = id, .body = cid, .mass = mass});
+  }
+  Body& removed_body = bodies_[id];
+  removed_body.removed = true;
+  removed_body.awake = false;
+  removed_body.solver.reset();
+  events_.removed.push_back(id);
+  // Siblings start in contact along their crack faces: they touch only once they have parted.
+  for (std::size_t i = 0; i < born.size(); ++i)
+    for (std::size_t j = i + 1; j < born.size(); ++j) exclude_until_apart(born[i], born[j]);
+  rec.fragments = static_cast<Index>(born.size());
+  events_.impacts.push_back(rec);
+}
+
 void World::step() {
   stats_ = {};
+  events_ = {};
   // Nothing to do while every dynamic body sleeps and no kinematic body moves.
   const bool anything_moves = std::any_of(bodies_.begin(), bodies_.end(), [](const Body& b) {
     if (b.type == BodyType::dynamic) return b.awake;
@@ -553,44 +799,51 @@ void World::step() {
     solve();
     update_sleep();
     stats_.solver_ms = ms_since(t0);
+    t0 = Clock::now();
+    ++step_count_;
+    process_impacts();
+    stats_.impact_ms = ms_since(t0);
+    return;
   }
   ++step_count_;
+}
+
+Index World::live_body_count() const {
+  return static_cast<Index>(std::count_if(bodies_.begin(), bodies_.end(), [](const Body& b) { return !b.removed; }));
 }
 
 double World::kinetic_energy() const {
   double e = 0;
   for (const Body& b : bodies_)
-    if (b.type == BodyType::dynamic) e += shatter::kinetic_energy(b.inertia, b.rigid);
+    if (b.type == BodyType::dynamic && !b.removed) e += shatter::kinetic_energy(b.inertia, b.rigid);
   return e;
 }
 
 WorldSnapshot World::save() const {
+  auto state = std::make_shared<State>();
+  state->world_id = world_id_;
+  state->bodies = bodies_;
+  state->contacts = contacts_;
+  state->excluded = excluded_;
+  state->until_apart = until_apart_;
+  state->open_impacts = open_impacts_;
+  state->step_count = step_count_;
   WorldSnapshot s;
-  s.bodies.reserve(bodies_.size());
-  for (const Body& b : bodies_) s.bodies.push_back({b.rigid, b.awake, b.sleep_time});
-  s.contacts = contacts_;
-  s.excluded = excluded_;
-  s.until_apart = until_apart_;
-  s.step_count = step_count_;
+  s.state_ = std::move(state);
   return s;
 }
 
 Result<void> World::restore(const WorldSnapshot& snapshot) {
-  if (snapshot.bodies.size() != bodies_.size())
-    return make_error("restore: the snapshot has " + std::to_string(snapshot.bodies.size()) + " bodies, the world " +
-                      std::to_string(bodies_.size()));
-  for (const Contact& c : snapshot.contacts)
-    if (c.body_a < 0 || c.body_b >= body_count() || c.body_a >= c.body_b)
-      return make_error("restore: the snapshot's contacts name bodies this world does not have");
-  for (std::size_t i = 0; i < bodies_.size(); ++i) {
-    bodies_[i].rigid = snapshot.bodies[i].rigid;
-    bodies_[i].awake = snapshot.bodies[i].awake;
-    bodies_[i].sleep_time = snapshot.bodies[i].sleep_time;
-  }
-  contacts_ = snapshot.contacts;
-  excluded_ = snapshot.excluded;
-  until_apart_ = snapshot.until_apart;
-  step_count_ = snapshot.step_count;
+  if (!snapshot.state_) return make_error("restore: the snapshot is empty");
+  const State& s = *snapshot.state_;
+  if (s.world_id != world_id_) return make_error("restore: the snapshot was taken of another world");
+  bodies_ = s.bodies;
+  contacts_ = s.contacts;
+  excluded_ = s.excluded;
+  until_apart_ = s.until_apart;
+  open_impacts_ = s.open_impacts;
+  step_count_ = s.step_count;
+  events_ = {};
   return {};
 }
 
@@ -604,7 +857,11 @@ std::uint64_t World::state_hash() const {
                                  r.linear_velocity.z(), r.angular_velocity.x(), r.angular_velocity.y(),
                                  r.angular_velocity.z()});
     h.add(static_cast<std::uint8_t>(b.awake));
+    h.add(static_cast<std::uint8_t>(b.removed));
     h.add(b.sleep_time);
+    h.add(b.parent);
+    h.add(static_cast<Index>(b.plastic_strain.size()));
+    for (const double e : b.plastic_strain) h.add(e);
   }
   for (const Contact& c : contacts_) {
     h.add(std::array<Index, 4>{c.body_a, c.body_b, c.piece_a, c.piece_b});
@@ -623,6 +880,8 @@ std::uint64_t World::state_hash() const {
   for (const auto& p : excluded_) h.add(p);
   h.add(std::int64_t{-1});
   for (const auto& p : until_apart_) h.add(p);
+  h.add(std::int64_t{-1});
+  for (const auto& p : open_impacts_) h.add(p);
   return h.digest();
 }
 

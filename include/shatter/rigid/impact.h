@@ -1,0 +1,154 @@
+// Impact analysis (docs/method.md §2.7.1, docs/impacts.md): what one collision does to a body.
+// Given the body (model and state) and the contacts of one impact as any rigid-body engine
+// reports them (points, normals, impulses summed over the step, approach speeds), it
+//   1. turns the impulse into a static load with Hertz's contact time (never the engine's step),
+//   2. spreads the load over the surface nodes of each contact patch,
+//   3. holds the body as the paper does (every tet beyond r_coll anchored) or by inertia relief,
+//   4. solves the static equilibrium, and from its stresses
+//   5. lets the rest shape absorb plastic deformation (dents) and cracks the body (fracture/),
+//   6. returns the pieces as child bodies with exact mass properties that carry the parent's
+//      motion (eq. 22), their crack faces marked.
+// It knows nothing of the world: World calls it at each impact event, and any engine can.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "shatter/core/error.h"
+#include "shatter/core/types.h"
+#include "shatter/fem/material.h"
+#include "shatter/fracture/fracture.h"
+#include "shatter/rigid/body.h"
+#include "shatter/solve/static_solver.h"
+
+namespace shatter {
+
+/// One contact point of an impact, in world coordinates.
+struct ImpactContact {
+  Vec3 point = Vec3::Zero();    ///< contact point, m
+  Vec3 normal = Vec3::UnitY();  ///< unit direction of the push on this body (into it)
+  /// Normal impulse the body received here, N s (>= 0), summed over every substep and solver
+  /// pass of the step (not the last pass's value).
+  double normal_impulse = 0;
+  double approach_speed = 0;  ///< closing speed along the normal before the solve, m/s
+};
+
+/// How the body is held for the static solve.
+enum class ImpactHold : std::uint8_t {
+  /// The paper: every tet whose centroid is farther than r_coll from all loaded contacts is held
+  /// in place; the held far field stands in for the body's inertia.
+  anchor_far,
+  /// Inertia relief (as in structural FEA codes): body forces -m_i (a + alpha x r_i) balance the
+  /// load, and three far nodes are held against drift; their reactions are near zero.
+  inertia_relief,
+};
+
+/// "anchor-far", "inertia-relief".
+const char* to_string(ImpactHold hold);
+
+/// The static solver's defaults with the warm start off (see ImpactSettings::solver).
+StaticSolverOptions default_impact_solver_options();
+
+/// Settings of analyze_impact.
+struct ImpactSettings {
+  /// Impacts slower than this (the largest approach speed of the contacts), m/s, are not
+  /// analysed: resting and sliding contact never dents or breaks a body.
+  double min_approach_speed = 1.0;
+  ImpactHold hold = ImpactHold::anchor_far;
+  /// r_coll = collision_radius x the body's radius (largest distance of a node from the centre
+  /// of mass). When no tet lies beyond it, the farthest fifth of the body is held instead.
+  double collision_radius = 0.5;
+  /// Hertz's local radius of curvature R = curvature_radius x the body's radius.
+  double curvature_radius = 0.25;
+  /// Elastic constants of what the body hit, for Hertz's effective modulus; empty: the same
+  /// material as the body's. Infinite E: a rigid obstacle.
+  std::optional<Material> other_material;
+  /// The load of a contact is spread over the surface vertices within max(Hertz contact radius,
+  /// patch_edges x the local edge length) of it whose outward normal n satisfies
+  /// n . push <= patch_facing (those not facing away from the push): a load on one node is a
+  /// singularity whose stress grows with refinement.
+  double patch_edges = 1.0;
+  double patch_facing = 0.25;
+  /// The Hertz contact time is kept within [min_contact_time, max_contact_time], s.
+  double min_contact_time = 1e-5;
+  double max_contact_time = 1e-2;
+  /// Coefficient of restitution of the collision: the impulse J = (1 + e) m_eff v gives the
+  /// effective mass.
+  double restitution = 0;
+  /// Fracture and plasticity (the accumulated plastic strain comes from the state).
+  FractureOptions fracture;
+  /// The static solve. Its PCG warm start is off by default, so that an event's outcome depends
+  /// only on the body and its contacts, not on the solver's history (replays and restored
+  /// snapshots give the same bits); the pattern and symbolic analysis are reused either way.
+  StaticSolverOptions solver = default_impact_solver_options();
+  /// Children lighter than this fraction of the parent's mass, or than min_fragment_mass (kg), are
+  /// removed as debris (their mass is reported), and at most max_fragments children are kept, the
+  /// heaviest.
+  double min_fragment_fraction = 2e-3;
+  double min_fragment_mass = 0;
+  int max_fragments = 32;
+};
+
+/// A body that an impact made: the only child of a dented or cracked but whole body, or one
+/// fragment of a broken one.
+struct ImpactChild {
+  std::shared_ptr<BodyModel> model;    ///< body frame centred on the child's centre of mass
+  RigidState rigid;                    ///< pose (the parent's orientation) and eq. 22 velocities
+  std::vector<double> plastic_strain;  ///< per child tet
+  std::vector<Index> parent_tet;       ///< the parent's tet each child tet lies in (#tets)
+};
+
+/// What analyze_impact found and did.
+struct ImpactResult {
+  /// False when the contacts carry no impulse or are slower than min_approach_speed: nothing was
+  /// solved and the body is unchanged.
+  bool analysed = false;
+  double approach_speed = 0;  ///< largest approach speed of the loaded contacts, m/s
+  double impulse = 0;         ///< total normal impulse, N s
+  double effective_mass = 0;  ///< impulse / ((1 + e) v), kg
+  double contact_time = 0;    ///< Hertz contact time (clamped), s
+  double force = 0;           ///< total static load, N (the peak of the impact)
+  double patch_radius = 0;    ///< radius the load of each contact is spread over, m
+  double collision_radius = 0;  ///< r_coll, m
+  Vec3 load_point = Vec3::Zero();  ///< impulse-weighted contact point, world, m
+  Index loaded_nodes = 0;          ///< nodes carrying load
+  Index held_nodes = 0;            ///< nodes held
+  StaticReport solve;              ///< the static solve
+  double max_principal_stress = 0;  ///< largest principal stress over the tets, Pa
+  double max_von_mises = 0;         ///< largest von Mises stress, Pa
+  bool dented = false;              ///< plasticity changed the rest shape
+  std::vector<CrackEvent> cracks;   ///< cracks cut, in order
+  /// Empty: the body is unchanged (maybe with more plastic strain, see plastic_strain). One: the
+  /// body goes on with a new model (dented or cracked but whole). More: it broke into these.
+  std::vector<ImpactChild> children;
+  std::vector<double> plastic_strain;  ///< per parent tet after the event (when children is empty)
+  Index debris_count = 0;              ///< fragments removed by the debris rules
+  double debris_mass = 0;              ///< their mass, kg
+  double solve_ms = 0;                 ///< static solve, ms
+  double fracture_ms = 0;              ///< stresses, plasticity, cracks and children, ms
+};
+
+/// The impact analysis of one body (see the file comment). `state.rigid` is the body's motion
+/// after the collision response (its children inherit it); contacts are world quantities of this
+/// body only. Reuses and fills state.solver. Errors: sizes of the state that do not match the
+/// model, non-finite contacts.
+Result<ImpactResult> analyze_impact(const BodyModel& model, BodyState& state, std::span<const ImpactContact> contacts,
+                                    const ImpactSettings& settings = {});
+
+/// Hertz's effective modulus 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2, Pa (E2 = +inf: rigid).
+double hertz_effective_modulus(const Material& a, const Material& b);
+
+/// Hertz's impact of a sphere of radius R and mass m at speed v on a half-space (Johnson,
+/// Contact Mechanics, §11.4): the largest approach delta = (15 m v^2 / (16 E* sqrt R))^(2/5), the
+/// contact time 2.94 delta / v and the contact radius sqrt(R delta).
+struct HertzImpact {
+  double max_approach = 0;    ///< delta, m
+  double contact_time = 0;    ///< s
+  double contact_radius = 0;  ///< m
+  double peak_force = 0;      ///< 4/3 E* sqrt(R) delta^(3/2), N
+};
+HertzImpact hertz_impact(double effective_mass, double speed, double radius, double effective_modulus);
+
+}  // namespace shatter

@@ -1,0 +1,432 @@
+// Impact analysis (see impact.h and docs/impacts.md).
+#include "shatter/rigid/impact.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <numeric>
+#include <string>
+#include <utility>
+
+#include "shatter/core/assert.h"
+#include "shatter/fracture/stress.h"
+#include "shatter/mesh/mass_properties.h"
+#include "shatter/mesh/topology.h"
+
+namespace shatter {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+// A loaded contact in the body frame.
+struct LocalLoad {
+  Vec3 point;      // m
+  Vec3 direction;  // unit, into the body
+  double impulse;  // N s
+};
+
+// Per surface vertex: its share of the surface area (a third of each triangle's), m^2, and its
+// area-weighted outward normal (not unit).
+struct SurfaceAreas {
+  std::vector<double> area;
+  std::vector<Vec3> normal;
+  std::vector<double> edge;  // mean length of the edges of its triangles, m
+};
+
+SurfaceAreas surface_areas(const TriSurface& s) {
+  const std::size_t nv = s.positions.size();
+  SurfaceAreas a;
+  a.area.assign(nv, 0.0);
+  a.normal.assign(nv, Vec3::Zero());
+  a.edge.assign(nv, 0.0);
+  std::vector<int> edges(nv, 0);
+  for (const TriIndices& t : s.triangles) {
+    const Vec3& p0 = s.positions[t[0]];
+    const Vec3& p1 = s.positions[t[1]];
+    const Vec3& p2 = s.positions[t[2]];
+    const Vec3 n = 0.5 * (p1 - p0).cross(p2 - p0);
+    const double len = (p1 - p0).norm() + (p2 - p1).norm() + (p0 - p2).norm();
+    for (const Index v : t) {
+      a.area[v] += n.norm() / 3.0;
+      a.normal[v] += n;
+      a.edge[v] += len;
+      edges[v] += 3;
+    }
+  }
+  for (std::size_t v = 0; v < nv; ++v)
+    if (edges[v] > 0) a.edge[v] /= edges[v];
+  return a;
+}
+
+// Nodes held for the paper's mode: every node of every tet whose centroid is farther than r from
+// all loads; when none is, the tets beyond 80 % of the farthest centroid distance.
+std::vector<AnchorMask> hold_far(const TetMesh& mesh, const std::vector<LocalLoad>& loads, double r) {
+  const Index nt = mesh.num_tets();
+  std::vector<double> distance(static_cast<std::size_t>(nt));
+  double farthest = 0;
+  for (Index e = 0; e < nt; ++e) {
+    const TetIndices& t = mesh.tets[e];
+    const Vec3 c = 0.25 * (mesh.positions[t[0]] + mesh.positions[t[1]] + mesh.positions[t[2]] + mesh.positions[t[3]]);
+    double d = std::numeric_limits<double>::infinity();
+    for (const LocalLoad& l : loads) d = std::min(d, (c - l.point).norm());
+    distance[e] = d;
+    farthest = std::max(farthest, d);
+  }
+  const double limit = farthest > r ? r : 0.8 * farthest;
+  std::vector<AnchorMask> anchors(mesh.positions.size(), anchor_none);
+  for (Index e = 0; e < nt; ++e)
+    if (distance[e] > limit || distance[e] == farthest)
+      for (const Index v : mesh.tets[e]) anchors[v] = anchor_all;
+  return anchors;
+}
+
+// Inertia relief: body forces that balance the load's force and moment about the centre of the
+// lumped masses (f_i = -m_i (a + alpha x r_i)), and three far, spread nodes held.
+std::vector<AnchorMask> hold_inertia_relief(const TetMesh& mesh, const FemModel& fem, const Vec3& load_point,
+                                            std::vector<Vec3>& forces) {
+  const std::size_t nn = mesh.positions.size();
+  double mass = 0;
+  Vec3 centre = Vec3::Zero();
+  for (std::size_t i = 0; i < nn; ++i) {
+    mass += fem.node_mass[i];
+    centre += fem.node_mass[i] * mesh.positions[i];
+  }
+  centre /= mass;
+  Vec3 force = Vec3::Zero();
+  Vec3 moment = Vec3::Zero();
+  Mat3 inertia = Mat3::Zero();
+  for (std::size_t i = 0; i < nn; ++i) {
+    const Vec3 r = mesh.positions[i] - centre;
+    force += forces[i];
+    moment += r.cross(forces[i]);
+    inertia += fem.node_mass[i] * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+  }
+  const Vec3 a = force / mass;
+  const Vec3 alpha = inertia.ldlt().solve(moment);
+  for (std::size_t i = 0; i < nn; ++i) forces[i] -= fem.node_mass[i] * (a + alpha.cross(mesh.positions[i] - centre));
+  // Three held nodes: the farthest from the load, the farthest from it, and the farthest from
+  // the line through both (ties: the lower index).
+  auto farthest = [&](auto&& distance) {
+    Index best = 0;
+    double best_d = -1;
+    for (std::size_t i = 0; i < nn; ++i) {
+      if (fem.node_mass[i] <= 0) continue;
+      const double d = distance(mesh.positions[i]);
+      if (d > best_d) {
+        best_d = d;
+        best = static_cast<Index>(i);
+      }
+    }
+    return best;
+  };
+  const Index n0 = farthest([&](const Vec3& x) { return (x - load_point).norm(); });
+  const Index n1 = farthest([&](const Vec3& x) { return (x - mesh.positions[n0]).norm(); });
+  const Vec3 axis = (mesh.positions[n1] - mesh.positions[n0]).normalized();
+  const Index n2 = farthest([&](const Vec3& x) {
+    const Vec3 d = x - mesh.positions[n0];
+    return (d - d.dot(axis) * axis).norm();
+  });
+  std::vector<AnchorMask> anchors(nn, anchor_none);
+  for (const Index v : {n0, n1, n2}) anchors[v] = anchor_all;
+  return anchors;
+}
+
+// Crack flags of a child's surface: a triangle lying on a boundary face of its parent tet keeps
+// that face's flag; any other triangle was opened by this event's cracks.
+std::vector<std::uint8_t> child_crack_faces(const BodyModel& parent, const std::vector<Vec3>& parent_rest,
+                                            const TriSurface& child_surface, const Vec3& child_offset,
+                                            const std::vector<Index>& child_parent_tet, double tolerance) {
+  std::map<std::array<Index, 3>, std::uint8_t> parent_flag;
+  for (std::size_t t = 0; t < parent.surface.triangles.size(); ++t) {
+    if (t >= parent.crack_face.size() || !parent.crack_face[t]) continue;
+    std::array<Index, 3> key;
+    for (int k = 0; k < 3; ++k) key[k] = parent.surface.vertex_node[parent.surface.triangles[t][k]];
+    std::sort(key.begin(), key.end());
+    parent_flag[key] = 1;
+  }
+  std::vector<std::uint8_t> flags(child_surface.triangles.size(), 1);
+  for (std::size_t t = 0; t < child_surface.triangles.size(); ++t) {
+    const TriIndices& tri = child_surface.triangles[t];
+    std::array<Vec3, 3> v;
+    for (int k = 0; k < 3; ++k) v[k] = child_surface.positions[tri[k]] + child_offset;
+    const Vec3 tn = (v[1] - v[0]).cross(v[2] - v[0]).normalized();
+    const Index pt = child_parent_tet[child_surface.triangle_tet[t]];
+    for (int k = 0; k < 4; ++k) {
+      const Index f = parent.faces.tet_faces[pt][k];
+      if (!parent.faces.is_boundary(f)) continue;
+      const TriIndices& pf = parent.faces.faces[f];
+      const Vec3& q0 = parent_rest[pf[0]];
+      const Vec3 n = (parent_rest[pf[1]] - q0).cross(parent_rest[pf[2]] - q0).normalized();
+      if (n.dot(tn) < 0.999) continue;
+      if (std::abs(n.dot(v[0] - q0)) > tolerance || std::abs(n.dot(v[1] - q0)) > tolerance ||
+          std::abs(n.dot(v[2] - q0)) > tolerance)
+        continue;
+      std::array<Index, 3> key{pf[0], pf[1], pf[2]};
+      std::sort(key.begin(), key.end());
+      flags[t] = parent_flag.contains(key) ? 1 : 0;
+      break;
+    }
+  }
+  return flags;
+}
+
+}  // namespace
+
+const char* to_string(ImpactHold hold) {
+  switch (hold) {
+    case ImpactHold::anchor_far:
+      return "anchor-far";
+    case ImpactHold::inertia_relief:
+      return "inertia-relief";
+  }
+  return "?";
+}
+
+StaticSolverOptions default_impact_solver_options() {
+  StaticSolverOptions o;
+  o.warm_start = false;
+  return o;
+}
+
+double hertz_effective_modulus(const Material& a, const Material& b) {
+  const double ca = (1 - a.poisson_ratio * a.poisson_ratio) / a.youngs_modulus;
+  const double cb = std::isinf(b.youngs_modulus) ? 0.0 : (1 - b.poisson_ratio * b.poisson_ratio) / b.youngs_modulus;
+  return 1.0 / (ca + cb);
+}
+
+HertzImpact hertz_impact(double effective_mass, double speed, double radius, double effective_modulus) {
+  HertzImpact h;
+  if (!(effective_mass > 0) || !(speed > 0) || !(radius > 0) || !(effective_modulus > 0)) return h;
+  const double sqrt_r = std::sqrt(radius);
+  h.max_approach = std::pow(15.0 * effective_mass * speed * speed / (16.0 * effective_modulus * sqrt_r), 0.4);
+  h.contact_time = 2.94 * h.max_approach / speed;
+  h.contact_radius = std::sqrt(radius * h.max_approach);
+  h.peak_force = 4.0 / 3.0 * effective_modulus * sqrt_r * std::pow(h.max_approach, 1.5);
+  return h;
+}
+
+Result<ImpactResult> analyze_impact(const BodyModel& model, BodyState& state, std::span<const ImpactContact> contacts,
+                                    const ImpactSettings& settings) {
+  const std::size_t nn = model.mesh.positions.size();
+  const Index nt = model.mesh.num_tets();
+  if (nt == 0) return make_error("analyze_impact: the body model has no tets");
+  if (!state.plastic_strain.empty() && state.plastic_strain.size() != static_cast<std::size_t>(nt))
+    return make_error("analyze_impact: the state has " + std::to_string(state.plastic_strain.size()) +
+                      " plastic strains for " + std::to_string(nt) + " tets");
+  for (std::size_t k = 0; k < contacts.size(); ++k) {
+    const ImpactContact& c = contacts[k];
+    if (!c.point.allFinite() || !c.normal.allFinite() || !std::isfinite(c.normal_impulse) ||
+        !std::isfinite(c.approach_speed) || c.normal_impulse < 0 || !(c.normal.norm() > 0))
+      return make_error("analyze_impact: contact " + std::to_string(k) +
+                        " is not finite, has a zero normal or a negative impulse");
+  }
+
+  ImpactResult result;
+  result.plastic_strain = state.plastic_strain;
+  if (result.plastic_strain.empty()) result.plastic_strain.assign(static_cast<std::size_t>(nt), 0.0);
+
+  // Loads in the body frame; the impact's speed is that of its fastest loaded contact.
+  const RigidState& rigid = state.rigid;
+  const Mat3 to_body = rigid.orientation.toRotationMatrix().transpose();
+  std::vector<LocalLoad> loads;
+  Vec3 weighted_point = Vec3::Zero();
+  for (const ImpactContact& c : contacts) {
+    if (!(c.normal_impulse > 0)) continue;
+    loads.push_back({to_body * (c.point - rigid.position), to_body * c.normal.normalized(), c.normal_impulse});
+    result.impulse += c.normal_impulse;
+    result.approach_speed = std::max(result.approach_speed, c.approach_speed);
+    weighted_point += c.normal_impulse * c.point;
+  }
+  if (loads.empty() || result.approach_speed < settings.min_approach_speed) return result;
+  result.analysed = true;
+  result.load_point = weighted_point / result.impulse;
+
+  // The load: Hertz's contact time for the effective mass the impulse implies, and the impulse
+  // delivered as a half-sine pulse of that duration, whose peak is (pi/2) J / T_c.
+  double body_radius = 0;
+  for (const Vec3& p : model.mesh.positions) body_radius = std::max(body_radius, p.norm());
+  const Material& material = model.fem.material;
+  const double e_star = hertz_effective_modulus(material, settings.other_material.value_or(material));
+  result.effective_mass = result.impulse / ((1 + settings.restitution) * result.approach_speed);
+  const HertzImpact hertz =
+      hertz_impact(result.effective_mass, result.approach_speed, settings.curvature_radius * body_radius, e_star);
+  result.contact_time = std::clamp(hertz.contact_time, settings.min_contact_time, settings.max_contact_time);
+  result.force = 0.5 * std::numbers::pi * result.impulse / result.contact_time;
+
+  // The footprint: the surface vertices within a patch radius of a loaded contact that face its
+  // push. The load is a uniform pressure over it (area weights), each vertex pushed along its
+  // nearest contact's normal. How a rigid solver splits an impulse among the points of a
+  // manifold is arbitrary, so the split is not used: only where the body touched.
+  const TriSurface& surface = model.surface;
+  const SurfaceAreas areas = surface_areas(surface);
+  const std::size_t nv = surface.positions.size();
+  std::vector<double> nearest_load(nv, std::numeric_limits<double>::infinity());
+  std::vector<Index> load_of(nv, -1);
+  for (std::size_t k = 0; k < loads.size(); ++k) {
+    const LocalLoad& l = loads[k];
+    Index nearest = 0;
+    double nearest_d = std::numeric_limits<double>::infinity();
+    for (std::size_t v = 0; v < nv; ++v) {
+      const double d = (surface.positions[v] - l.point).squaredNorm();
+      if (d < nearest_d) {
+        nearest_d = d;
+        nearest = static_cast<Index>(v);
+      }
+    }
+    const double radius = std::max(hertz.contact_radius, settings.patch_edges * areas.edge[nearest]);
+    result.patch_radius = std::max(result.patch_radius, radius);
+    bool any = false;
+    for (std::size_t v = 0; v < nv; ++v) {
+      const double d = (surface.positions[v] - l.point).norm();
+      if (d > radius || areas.normal[v].normalized().dot(l.direction) > settings.patch_facing) continue;
+      any = true;
+      if (d < nearest_load[v]) {
+        nearest_load[v] = d;
+        load_of[v] = static_cast<Index>(k);
+      }
+    }
+    if (!any && std::isinf(nearest_load[nearest])) {
+      nearest_load[nearest] = std::sqrt(nearest_d);
+      load_of[nearest] = static_cast<Index>(k);
+    }
+  }
+  double footprint = 0;
+  for (std::size_t v = 0; v < nv; ++v)
+    if (load_of[v] >= 0) footprint += std::max(areas.area[v], 1e-300);
+  std::vector<Vec3> forces(nn, Vec3::Zero());
+  std::vector<char> loaded(nn, 0);
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (load_of[v] < 0) continue;
+    const Index node = surface.vertex_node[v];
+    forces[node] += (result.force * std::max(areas.area[v], 1e-300) / footprint) * loads[load_of[v]].direction;
+    loaded[node] = 1;
+  }
+  result.loaded_nodes = static_cast<Index>(std::count(loaded.begin(), loaded.end(), 1));
+
+  // Hold the body and solve its static response.
+  StaticProblem problem;
+  result.collision_radius = settings.collision_radius * body_radius;
+  if (settings.hold == ImpactHold::anchor_far) {
+    problem.anchors = hold_far(model.mesh, loads, result.collision_radius);
+  } else {
+    Vec3 local_load_point = Vec3::Zero();
+    for (const LocalLoad& l : loads) local_load_point += (l.impulse / result.impulse) * l.point;
+    problem.anchors = hold_inertia_relief(model.mesh, model.fem, local_load_point, forces);
+  }
+  for (std::size_t i = 0; i < nn; ++i)
+    if (problem.anchors[i] != anchor_none) ++result.held_nodes;
+  problem.external_forces = std::move(forces);
+  if (!state.solver) state.solver = std::make_shared<StaticSolver>();
+  state.solver->set_options(settings.solver);
+  std::vector<Vec3> x = model.mesh.positions;
+  auto t0 = Clock::now();
+  SHATTER_TRY(report, state.solver->solve(model.fem, problem, x));
+  result.solve = *report;
+  result.solve_ms = ms_since(t0);
+
+  // Stresses, then plasticity and cracks only where a limit is passed.
+  t0 = Clock::now();
+  std::vector<TetStress> stress = compute_stresses(model.fem, x);
+  for (const TetStress& s : stress) {
+    result.max_principal_stress = std::max(result.max_principal_stress, s.principal[0]);
+    result.max_von_mises = std::max(result.max_von_mises, s.von_mises);
+  }
+  const FractureOptions& fo = settings.fracture;
+  const bool may_crack = fo.crack.max_cracks > 0 && result.max_principal_stress > material.tensile_strength;
+  const bool may_yield = fo.plasticity.enabled && result.max_von_mises > material.yield_stress;
+  if (!may_crack && !may_yield) {
+    result.fracture_ms = ms_since(t0);
+    return result;
+  }
+  FractureOptions options = fo;
+  options.plastic_strain = result.plastic_strain;
+  FractureResult fr = fracture_with_stress(model.mesh, model.fem, x, std::move(stress), options);
+  result.cracks = fr.events;
+  result.dented = !fr.plastic.moved_nodes.empty();
+
+  if (fr.events.empty()) {
+    result.plastic_strain = fr.plastic.plastic_strain;
+    if (result.dented) {
+      ImpactChild child;
+      auto dented = std::make_shared<BodyModel>(model);
+      BodyState moved;
+      moved.rigid = rigid;
+      apply_plastic_update(*dented, moved, fr.plastic);
+      child.model = std::move(dented);
+      child.rigid = moved.rigid;
+      child.plastic_strain = fr.plastic.plastic_strain;
+      child.parent_tet.resize(static_cast<std::size_t>(nt));
+      std::iota(child.parent_tet.begin(), child.parent_tet.end(), Index(0));
+      result.children.push_back(std::move(child));
+    }
+    result.fracture_ms = ms_since(t0);
+    return result;
+  }
+
+  // Children. The density follows the rest volume so that the parent's mass is kept exactly
+  // (plasticity may have changed the volume; a cut never does).
+  double volume = 0;
+  for (const Fragment& f : fr.fragments) volume += f.mass.volume;
+  Material child_material = material;
+  child_material.density = model.mass.mass / volume;
+  // Debris rules: the heaviest max_fragments children over the size limits are kept.
+  std::vector<std::size_t> order(fr.fragments.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return fr.fragments[a].mass.volume > fr.fragments[b].mass.volume;
+  });
+  std::vector<char> keep(fr.fragments.size(), 0);
+  const double min_mass = std::max(settings.min_fragment_mass, settings.min_fragment_fraction * model.mass.mass);
+  int kept = 0;
+  for (const std::size_t k : order) {
+    const double m = child_material.density * fr.fragments[k].mass.volume;
+    if (kept < settings.max_fragments && m >= min_mass) {
+      keep[k] = 1;
+      ++kept;
+    } else {
+      ++result.debris_count;
+      result.debris_mass += m;
+    }
+  }
+  const Mat3 to_world = rigid.orientation.toRotationMatrix();
+  const double tolerance = 1e-7 * std::max(body_radius, 1e-3);
+  for (std::size_t k = 0; k < fr.fragments.size(); ++k) {
+    if (!keep[k]) continue;
+    const Fragment& f = fr.fragments[k];
+    const Vec3 c = f.mass.center;
+    auto m = std::make_shared<BodyModel>();
+    m->mesh = f.mesh;
+    for (Vec3& p : m->mesh.positions) p -= c;
+    m->faces = compute_faces(m->mesh);
+    m->surface = boundary_surface(m->mesh, m->faces);
+    m->fem = make_fem_model(m->mesh, child_material, model.fem.model);
+    m->mass = mass_properties(m->mesh, child_material.density);
+    m->material_origin = model.material_origin + c;
+    ImpactChild child;
+    child.parent_tet.resize(f.tet_map.size());
+    child.plastic_strain.resize(f.tet_map.size());
+    for (std::size_t e = 0; e < f.tet_map.size(); ++e) {
+      child.parent_tet[e] = fr.tet_parent[f.tet_map[e]];
+      child.plastic_strain[e] = fr.plastic_strain[f.tet_map[e]];
+    }
+    m->crack_face = child_crack_faces(model, fr.plastic.rest_positions, m->surface, c, child.parent_tet, tolerance);
+    // Eq. 22: the child keeps the velocity of the parent's material at its centre.
+    child.rigid.orientation = rigid.orientation;
+    child.rigid.position = rigid.position + to_world * c;
+    child.rigid.angular_velocity = rigid.angular_velocity;
+    child.rigid.linear_velocity =
+        rigid.linear_velocity + rigid.angular_velocity.cross(child.rigid.position - rigid.position);
+    child.model = std::move(m);
+    result.children.push_back(std::move(child));
+  }
+  result.fracture_ms = ms_since(t0);
+  return result;
+}
+
+}  // namespace shatter
