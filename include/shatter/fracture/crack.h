@@ -31,6 +31,11 @@ struct CrackOptions {
   /// A further origin must lie outside every earlier crack's region and farther than
   /// separation x (that crack's r_frac) from each earlier origin.
   double separation = 1.0;
+  /// Branching: a further origin may also lie inside earlier cracks' regions, as long as it is
+  /// farther than separation x (that crack's r_min) from each earlier origin. Brittle bodies
+  /// under an impact then split along several planes from near the blow, as they shatter (the
+  /// regions are recomputed on the cut mesh, so a branch stays on its side of earlier cracks).
+  bool branch = false;
 };
 
 /// One planned crack.

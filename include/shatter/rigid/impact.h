@@ -51,6 +51,9 @@ const char* to_string(ImpactHold hold);
 /// The static solver's defaults with the warm start off (see ImpactSettings::solver).
 StaticSolverOptions default_impact_solver_options();
 
+/// The fracture defaults with branching cracks (see ImpactSettings::fracture).
+FractureOptions default_impact_fracture_options();
+
 /// Settings of analyze_impact.
 struct ImpactSettings {
   /// Impacts slower than this (the largest approach speed of the contacts), m/s, are not
@@ -60,16 +63,20 @@ struct ImpactSettings {
   /// r_coll = collision_radius x the body's radius (largest distance of a node from the centre
   /// of mass). When no tet lies beyond it, the farthest fifth of the body is held instead.
   double collision_radius = 0.5;
-  /// Hertz's local radius of curvature R = curvature_radius x the body's radius.
-  double curvature_radius = 0.25;
+  /// Hertz's radius of curvature R = curvature_radius x the body's radius: by default the body
+  /// meets the obstacle as a sphere of its own size would. (A smaller R means a softer, longer
+  /// contact: the force grows as R^(1/5).)
+  double curvature_radius = 1.0;
   /// Elastic constants of what the body hit, for Hertz's effective modulus; empty: the same
   /// material as the body's. Infinite E: a rigid obstacle.
   std::optional<Material> other_material;
   /// The load of a contact is spread over the surface vertices within max(Hertz contact radius,
-  /// patch_edges x the local edge length) of it whose outward normal n satisfies
-  /// n . push <= patch_facing (those not facing away from the push): a load on one node is a
-  /// singularity whose stress grows with refinement.
+  /// patch_edges x the local edge length, min_patch_radius x the body's radius) of it whose
+  /// outward normal n satisfies n . push <= patch_facing (those not facing away from the push).
+  /// A load on one node is a singularity whose stress grows with refinement; the floor in body
+  /// units keeps the load, and so the break decision, from changing once the mesh is finer than it.
   double patch_edges = 1.0;
+  double min_patch_radius = 0.1;
   double patch_facing = 0.25;
   /// The Hertz contact time is kept within [min_contact_time, max_contact_time], s.
   double min_contact_time = 1e-5;
@@ -77,8 +84,9 @@ struct ImpactSettings {
   /// Coefficient of restitution of the collision: the impulse J = (1 + e) m_eff v gives the
   /// effective mass.
   double restitution = 0;
-  /// Fracture and plasticity (the accumulated plastic strain comes from the state).
-  FractureOptions fracture;
+  /// Fracture and plasticity (the accumulated plastic strain comes from the state). Cracks branch
+  /// by default (CrackOptions::branch): a brittle body breaks into several pieces near the blow.
+  FractureOptions fracture = default_impact_fracture_options();
   /// The static solve. Its PCG warm start is off by default, so that an event's outcome depends
   /// only on the body and its contacts, not on the solver's history (replays and restored
   /// snapshots give the same bits); the pattern and symbolic analysis are reused either way.

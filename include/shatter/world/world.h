@@ -301,8 +301,18 @@ class World {
   BodyId add(const BodyDef& def, std::shared_ptr<const Shape> shape, std::shared_ptr<const BodyModel> model = {});
   /// Convex pieces (and the paper's contact shape) of a tet model.
   [[nodiscard]] Result<std::shared_ptr<const Shape>> make_tet_shape(const BodyModel& model) const;
-  /// The same pieces over the same tets of a model whose nodes moved (a dent).
-  [[nodiscard]] Result<std::shared_ptr<const Shape>> reshape(const Shape& old, const BodyModel& model) const;
+  /// The shape of a model added by the user: built once per process for each model and settings
+  /// and shared by every world that adds it (the decomposition of a large body takes a while).
+  [[nodiscard]] Result<std::shared_ptr<const Shape>> shared_tet_shape(const std::shared_ptr<const BodyModel>& model) const;
+  /// Pieces over the given clusters of the model's tets (a dent moves nodes; a fragment keeps its
+  /// parent's clusters, cut to the tets it has).
+  [[nodiscard]] Result<std::shared_ptr<const Shape>> shape_from_clusters(std::vector<std::vector<Index>> clusters,
+                                                                        const BodyModel& model) const;
+  /// A fragment's pieces from its parent's: its tets grouped by the parent piece their parent tet
+  /// lay in.
+  [[nodiscard]] Result<std::shared_ptr<const Shape>> inherit_shape(const Shape& parent,
+                                                                   const std::vector<Index>& parent_tet,
+                                                                   const BodyModel& model) const;
   void process_impacts();
   /// Replace body id by the outcome of its impact analysis; records the events.
   void apply_impact(BodyId id, BodyId other, ImpactResult& r);
@@ -319,7 +329,23 @@ class World {
   std::vector<Contact> contacts_;                   ///< sorted by key
   std::vector<std::array<BodyId, 2>> excluded_;     ///< sorted
   std::vector<std::array<BodyId, 2>> until_apart_;  ///< sorted
-  std::vector<std::array<BodyId, 2>> open_impacts_;  ///< pairs in an impact event, sorted
+  /// An impact event: a pair that started touching fast enough, until it stops touching. Its
+  /// impulses are summed until the pair stops approaching (a collision the solver resolves over
+  /// two steps counts whole), then each breakable body of it is analysed once.
+  struct OpenImpact {
+    std::array<BodyId, 2> pair{};
+    int steps = 0;          ///< steps it has been open
+    bool analysed = false;  ///< its analysis is done
+    double approach = 0;    ///< fastest approach of its points, m/s
+    struct Point {
+      Vec3 local_a, local_b;    ///< the point in A's and B's body frames, m
+      Vec3 normal_a, normal_b;  ///< the push on A and on B, in their body frames
+      double impulse = 0;       ///< N s
+      double approach = 0;      ///< m/s
+    };
+    std::vector<Point> points;
+  };
+  std::vector<OpenImpact> open_impacts_;  ///< sorted by pair
   std::int64_t step_count_ = 0;
   std::uint64_t world_id_ = 0;  ///< tells this world's snapshots from others'
   StepStats stats_;

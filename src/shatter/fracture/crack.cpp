@@ -77,12 +77,15 @@ std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStr
   const NodeTets incidence = node_tets(mesh);
   std::vector<char> taken(mesh.tets.size(), 0);
   auto consider = [&](Index e, bool ductile) {
-    if (static_cast<int>(plans.size()) >= options.max_cracks || taken[e]) return;
+    if (static_cast<int>(plans.size()) >= options.max_cracks || (taken[e] && !options.branch)) return;
     const Vec3 c = centroid(mesh, e);
     const double r_min = options.min_radius_edges * longest_edge(mesh, e);
     const double r = ductile ? r_min : crack_radius(stress[e].principal[0], strength, k, r0, r_min);
-    for (const CrackPlan& p : plans)
-      if ((c - p.origin).norm() <= options.separation * p.radius) return;
+    for (const CrackPlan& p : plans) {
+      const double keep_off =
+          options.branch ? options.min_radius_edges * longest_edge(mesh, p.origin_tet) : p.radius;
+      if ((c - p.origin).norm() <= options.separation * keep_off) return;
+    }
     CrackPlan p;
     p.origin_tet = e;
     p.origin = c;

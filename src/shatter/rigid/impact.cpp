@@ -194,6 +194,12 @@ StaticSolverOptions default_impact_solver_options() {
   return o;
 }
 
+FractureOptions default_impact_fracture_options() {
+  FractureOptions o;
+  o.crack.branch = true;
+  return o;
+}
+
 double hertz_effective_modulus(const Material& a, const Material& b) {
   const double ca = (1 - a.poisson_ratio * a.poisson_ratio) / a.youngs_modulus;
   const double cb = std::isinf(b.youngs_modulus) ? 0.0 : (1 - b.poisson_ratio * b.poisson_ratio) / b.youngs_modulus;
@@ -259,17 +265,16 @@ Result<ImpactResult> analyze_impact(const BodyModel& model, BodyState& state, st
   result.contact_time = std::clamp(hertz.contact_time, settings.min_contact_time, settings.max_contact_time);
   result.force = 0.5 * std::numbers::pi * result.impulse / result.contact_time;
 
-  // The footprint: the surface vertices within a patch radius of a loaded contact that face its
-  // push. The load is a uniform pressure over it (area weights), each vertex pushed along its
-  // nearest contact's normal. How a rigid solver splits an impulse among the points of a
-  // manifold is arbitrary, so the split is not used: only where the body touched.
+  // Each contact's share of the load, in proportion to its impulse, as a uniform pressure over its
+  // patch: the surface vertices within the patch radius that do not face away from the push
+  // (area weights). The nearest vertex alone takes it when no vertex qualifies.
   const TriSurface& surface = model.surface;
   const SurfaceAreas areas = surface_areas(surface);
   const std::size_t nv = surface.positions.size();
-  std::vector<double> nearest_load(nv, std::numeric_limits<double>::infinity());
-  std::vector<Index> load_of(nv, -1);
-  for (std::size_t k = 0; k < loads.size(); ++k) {
-    const LocalLoad& l = loads[k];
+  std::vector<Vec3> forces(nn, Vec3::Zero());
+  std::vector<char> loaded(nn, 0);
+  std::vector<std::pair<Index, double>> patch;
+  for (const LocalLoad& l : loads) {
     Index nearest = 0;
     double nearest_d = std::numeric_limits<double>::infinity();
     for (std::size_t v = 0; v < nv; ++v) {
@@ -279,33 +284,28 @@ Result<ImpactResult> analyze_impact(const BodyModel& model, BodyState& state, st
         nearest = static_cast<Index>(v);
       }
     }
-    const double radius = std::max(hertz.contact_radius, settings.patch_edges * areas.edge[nearest]);
+    const double radius = std::max({hertz.contact_radius, settings.patch_edges * areas.edge[nearest],
+                                    settings.min_patch_radius * body_radius});
     result.patch_radius = std::max(result.patch_radius, radius);
-    bool any = false;
+    patch.clear();
+    double total = 0;
     for (std::size_t v = 0; v < nv; ++v) {
-      const double d = (surface.positions[v] - l.point).norm();
-      if (d > radius || areas.normal[v].normalized().dot(l.direction) > settings.patch_facing) continue;
-      any = true;
-      if (d < nearest_load[v]) {
-        nearest_load[v] = d;
-        load_of[v] = static_cast<Index>(k);
-      }
+      if ((surface.positions[v] - l.point).norm() > radius ||
+          areas.normal[v].normalized().dot(l.direction) > settings.patch_facing)
+        continue;
+      patch.emplace_back(static_cast<Index>(v), areas.area[v]);
+      total += areas.area[v];
     }
-    if (!any && std::isinf(nearest_load[nearest])) {
-      nearest_load[nearest] = std::sqrt(nearest_d);
-      load_of[nearest] = static_cast<Index>(k);
+    if (!(total > 0)) {
+      patch.assign(1, {nearest, 1.0});
+      total = 1.0;
     }
-  }
-  double footprint = 0;
-  for (std::size_t v = 0; v < nv; ++v)
-    if (load_of[v] >= 0) footprint += std::max(areas.area[v], 1e-300);
-  std::vector<Vec3> forces(nn, Vec3::Zero());
-  std::vector<char> loaded(nn, 0);
-  for (std::size_t v = 0; v < nv; ++v) {
-    if (load_of[v] < 0) continue;
-    const Index node = surface.vertex_node[v];
-    forces[node] += (result.force * std::max(areas.area[v], 1e-300) / footprint) * loads[load_of[v]].direction;
-    loaded[node] = 1;
+    const Vec3 f = (result.force * l.impulse / result.impulse) * l.direction;
+    for (const auto& [v, w] : patch) {
+      const Index node = surface.vertex_node[v];
+      forces[node] += (w / total) * f;
+      loaded[node] = 1;
+    }
   }
   result.loaded_nodes = static_cast<Index>(std::count(loaded.begin(), loaded.end(), 1));
 

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <numeric>
 #include <tuple>
 #include <utility>
@@ -17,6 +18,9 @@ namespace shatter {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// An impact event is analysed at the latest this many steps after it opened.
+constexpr int kMaxImpactSteps = 3;
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
@@ -80,7 +84,7 @@ struct World::State {
   std::vector<Contact> contacts;
   std::vector<std::array<BodyId, 2>> excluded;
   std::vector<std::array<BodyId, 2>> until_apart;
-  std::vector<std::array<BodyId, 2>> open_impacts;
+  std::vector<World::OpenImpact> open_impacts;
   std::int64_t step_count = 0;
 };
 
@@ -121,7 +125,7 @@ Result<BodyId> World::add_body(std::shared_ptr<const BodyModel> model, const Bod
   if (model->mesh.tets.empty()) return make_error("add_body: the body model has no tets");
   if (def.type == BodyType::dynamic && !(model->mass.mass > 0))
     return make_error("add_body: a dynamic body needs a positive mass (check the material density)");
-  auto shape = make_tet_shape(*model);
+  auto shape = shared_tet_shape(model);
   if (!shape) return make_error("add_body: " + shape.error().message);
   return add(def, std::move(*shape), std::move(model));
 }
@@ -143,11 +147,40 @@ Result<std::shared_ptr<const World::Shape>> World::make_tet_shape(const BodyMode
   return std::shared_ptr<const Shape>(std::move(shape));
 }
 
-Result<std::shared_ptr<const World::Shape>> World::reshape(const Shape& old, const BodyModel& model) const {
+Result<std::shared_ptr<const World::Shape>> World::shared_tet_shape(
+    const std::shared_ptr<const BodyModel>& model) const {
+  // Keyed by the model's address, checked against a weak reference so that a new model at a
+  // reused address is not mistaken for the old one.
+  struct Entry {
+    std::weak_ptr<const BodyModel> model;
+    DecompositionOptions options;
+    ContactMode mode;
+    std::shared_ptr<const Shape> shape;
+  };
+  static std::mutex mutex;
+  static std::vector<Entry> cache;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    std::erase_if(cache, [](const Entry& e) { return e.model.expired(); });
+    for (const Entry& e : cache)
+      if (e.model.lock() == model && e.mode == settings_.contact_mode &&
+          e.options.max_overfill == settings_.decomposition.max_overfill &&
+          e.options.max_pieces == settings_.decomposition.max_pieces)
+        return e.shape;
+  }
+  auto shape = make_tet_shape(*model);
+  if (!shape) return shape.error();
+  const std::lock_guard<std::mutex> lock(mutex);
+  cache.push_back({model, settings_.decomposition, settings_.contact_mode, *shape});
+  return *shape;
+}
+
+Result<std::shared_ptr<const World::Shape>> World::shape_from_clusters(std::vector<std::vector<Index>> clusters,
+                                                                        const BodyModel& model) const {
   auto shape = std::make_shared<Shape>();
   std::vector<Vec3> points;
   std::vector<char> seen(model.mesh.positions.size(), 0);
-  for (const std::vector<Index>& tets : old.piece_tets) {
+  for (const std::vector<Index>& tets : clusters) {
     points.clear();
     for (const Index e : tets)
       for (const Index v : model.mesh.tets[e])
@@ -158,16 +191,41 @@ Result<std::shared_ptr<const World::Shape>> World::reshape(const Shape& old, con
     for (const Index e : tets)
       for (const Index v : model.mesh.tets[e]) seen[v] = 0;
     auto hull = build_convex_hull(points);
-    if (!hull) return make_error("a convex piece could not be rebuilt: " + hull.error().message);
+    if (!hull) return make_error("a convex piece could not be built: " + hull.error().message);
     shape->pieces.push_back(std::move(*hull));
   }
-  shape->piece_tets = old.piece_tets;
-  if (!old.tet.empty()) shape->tet.push_back(make_tet_contact_shape(model.mesh, model.faces));
+  shape->piece_tets = std::move(clusters);
+  if (settings_.contact_mode == ContactMode::tet_vertices)
+    shape->tet.push_back(make_tet_contact_shape(model.mesh, model.faces));
   for (const Vec3& x : model.mesh.positions) {
     shape->local_bounds.extend(x);
     shape->radius = std::max(shape->radius, x.norm());
   }
   return std::shared_ptr<const Shape>(std::move(shape));
+}
+
+Result<std::shared_ptr<const World::Shape>> World::inherit_shape(const Shape& parent,
+                                                                 const std::vector<Index>& parent_tet,
+                                                                 const BodyModel& model) const {
+  Index parent_tets = 0;
+  for (const auto& tets : parent.piece_tets)
+    for (const Index e : tets) parent_tets = std::max(parent_tets, e + 1);
+  std::vector<Index> piece_of(static_cast<std::size_t>(parent_tets), -1);
+  for (std::size_t p = 0; p < parent.piece_tets.size(); ++p)
+    for (const Index e : parent.piece_tets[p]) piece_of[e] = static_cast<Index>(p);
+  std::vector<Index> slot(parent.piece_tets.size(), -1);
+  std::vector<std::vector<Index>> clusters;
+  for (std::size_t e = 0; e < parent_tet.size(); ++e) {
+    const Index pt = parent_tet[e];
+    const Index p = pt >= 0 && pt < parent_tets ? piece_of[pt] : -1;
+    if (p < 0) return make_error("a fragment tet has no parent piece");
+    if (slot[p] < 0) {
+      slot[p] = static_cast<Index>(clusters.size());
+      clusters.emplace_back();
+    }
+    clusters[slot[p]].push_back(static_cast<Index>(e));
+  }
+  return shape_from_clusters(std::move(clusters), model);
 }
 
 Result<BodyId> World::add_hull(ConvexHull hull, const BodyDef& def) {
@@ -599,95 +657,131 @@ void World::process_impacts() {
   auto analysable = [](const Body& b) {
     return b.type == BodyType::dynamic && b.model && b.breakable && !b.removed;
   };
-  // Pairs touching this step (some point pushed or overlaps), and the new events among them.
-  std::vector<std::array<BodyId, 2>> touching;
-  std::vector<std::array<BodyId, 2>> opened;
+  auto velocity_at = [](const Body& b, const Vec3& p) {
+    return Vec3(b.rigid.linear_velocity + b.rigid.angular_velocity.cross(p - b.rigid.position));
+  };
+  // Walk the pairs touching this step (some point pushed or overlaps) with the open events.
+  std::vector<OpenImpact> next;
+  std::vector<std::size_t> ready;  // events of `next` to analyse now
+  auto old = open_impacts_.begin();
   for (std::size_t i = 0; i < contacts_.size();) {
     std::size_t j = i;
-    double approach = 0;
+    const BodyId a = contacts_[i].body_a;
+    const BodyId b = contacts_[i].body_b;
+    const Body& ba = bodies_[a];
+    const Body& bb = bodies_[b];
+    double approach = 0;       // fastest approach of a pushing point before the solve
+    double still_closing = 0;  // fastest approach of a pushing point after it
     bool touches = false;
-    while (j < contacts_.size() && contacts_[j].body_a == contacts_[i].body_a &&
-           contacts_[j].body_b == contacts_[i].body_b) {
+    std::vector<OpenImpact::Point> points;
+    const Mat3 ra = ba.rigid.orientation.toRotationMatrix();
+    const Mat3 rb = bb.rigid.orientation.toRotationMatrix();
+    for (; j < contacts_.size() && contacts_[j].body_a == a && contacts_[j].body_b == b; ++j) {
       const ContactConstraint& cc = contacts_[j].constraint;
       for (int k = 0; k < cc.count; ++k) {
         const ContactPoint& p = cc.points[k];
-        if (p.total_normal_impulse > 0) {
-          touches = true;
-          approach = std::max(approach, p.approach_speed);
-        }
         if (p.separation <= 0) touches = true;
+        if (!(p.total_normal_impulse > 0)) continue;
+        touches = true;
+        approach = std::max(approach, p.approach_speed);
+        // The manifold point lies midway across the gap the step started with: move it onto each
+        // surface.
+        const Vec3 half_gap = 0.5 * std::max(p.separation, 0.0) * cc.normal;
+        const Vec3 pa = ba.rigid.position + ra * p.local_anchor_a - half_gap;
+        const Vec3 pb = bb.rigid.position + rb * p.local_anchor_b + half_gap;
+        still_closing = std::max(still_closing, -cc.normal.dot(velocity_at(bb, pb) - velocity_at(ba, pa)));
+        points.push_back({.local_a = ra.transpose() * (pa - ba.rigid.position),
+                          .local_b = rb.transpose() * (pb - bb.rigid.position),
+                          .normal_a = ra.transpose() * -cc.normal,
+                          .normal_b = rb.transpose() * cc.normal,
+                          .impulse = p.total_normal_impulse,
+                          .approach = p.approach_speed});
       }
-      ++j;
     }
-    const BodyId a = contacts_[i].body_a;
-    const BodyId b = contacts_[i].body_b;
     i = j;
-    if (!touches) continue;
-    touching.push_back({a, b});
-    if (contains_pair(open_impacts_, a, b)) continue;
-    const double threshold =
-        std::min(settings_of(bodies_[a]).min_approach_speed, settings_of(bodies_[b]).min_approach_speed);
-    if (approach >= threshold && (analysable(bodies_[a]) || analysable(bodies_[b]))) opened.push_back({a, b});
+    while (old != open_impacts_.end() && old->pair < std::array<BodyId, 2>{a, b}) ++old;
+    const bool was_open = old != open_impacts_.end() && old->pair == std::array<BodyId, 2>{a, b};
+    if (!touches) continue;  // apart: its event (if any) closes
+    if (was_open) {
+      OpenImpact e = *old;
+      ++e.steps;
+      if (!e.analysed) {
+        e.points.insert(e.points.end(), points.begin(), points.end());
+        e.approach = std::max(e.approach, approach);
+      }
+      e.pair = {a, b};
+      next.push_back(std::move(e));
+    } else {
+      const double threshold =
+          std::min(settings_of(ba).min_approach_speed, settings_of(bb).min_approach_speed);
+      if (approach < threshold || (!analysable(ba) && !analysable(bb))) continue;
+      next.push_back({.pair = {a, b}, .steps = 0, .analysed = false, .approach = approach, .points = points});
+    }
+    // Ready once the pair no longer closes (the solver resolved the collision), or after a few
+    // steps whatever happens.
+    OpenImpact& e = next.back();
+    if (!e.analysed && (still_closing <= 0.1 * e.approach || e.steps >= kMaxImpactSteps)) {
+      e.analysed = true;
+      ready.push_back(next.size() - 1);
+    }
   }
-  // Events stay open while their pair touches.
-  std::vector<std::array<BodyId, 2>> still_open;
-  for (const auto& pr : touching)
-    if (contains_pair(open_impacts_, pr[0], pr[1]) || std::binary_search(opened.begin(), opened.end(), pr))
-      still_open.push_back(pr);
-  open_impacts_ = std::move(still_open);
-  if (opened.empty()) return;
+  open_impacts_ = std::move(next);
 
-  // One analysis per body over the contacts of all its new events, by increasing body id.
-  std::vector<std::array<BodyId, 2>> work;  // (body, other)
-  for (const auto& pr : opened)
+  // One analysis per body over the points of all its events that became ready, by body id.
+  std::vector<std::array<Index, 3>> work;  // (body, other, event)
+  for (const std::size_t k : ready) {
+    const OpenImpact& e = open_impacts_[k];
     for (int side = 0; side < 2; ++side)
-      if (analysable(bodies_[pr[side]])) work.push_back({pr[side], pr[1 - side]});
+      if (analysable(bodies_[e.pair[side]]))
+        work.push_back({e.pair[side], e.pair[1 - side], static_cast<Index>(k)});
+  }
   std::sort(work.begin(), work.end());
+  std::vector<std::pair<BodyId, BodyId>> analyse;
+  std::vector<std::vector<ImpactContact>> contacts_of;
+  std::vector<double> restitution_of;
   for (std::size_t i = 0; i < work.size();) {
     const BodyId id = work[i][0];
-    const BodyId first_other = work[i][1];
+    const Body& body = bodies_[id];
+    const Mat3 rotation = body.rigid.orientation.toRotationMatrix();
     std::vector<ImpactContact> found;
     double restitution = 0;
+    const BodyId first_other = work[i][1];
     for (; i < work.size() && work[i][0] == id; ++i) {
-      const BodyId other = work[i][1];
-      const std::array<BodyId, 2> key{std::min(id, other), std::max(id, other)};
-      const bool is_b = id == key[1];
-      const Body& body = bodies_[id];
-      const Mat3 rotation = body.rigid.orientation.toRotationMatrix();
-      restitution = std::max(restitution, std::max(body.surface.restitution, bodies_[other].surface.restitution));
-      for (const Contact& c : contacts_) {
-        if (c.body_a != key[0] || c.body_b != key[1]) continue;
-        const ContactConstraint& cc = c.constraint;
-        for (int k = 0; k < cc.count; ++k) {
-          const ContactPoint& p = cc.points[k];
-          if (!(p.total_normal_impulse > 0)) continue;
-          // The point where it is on the body now, and the push on this body: the normal points
-          // from A to B, and the manifold point lies midway across the gap the step started with.
-          const Vec3 local = is_b ? p.local_anchor_b : p.local_anchor_a;
-          const Vec3 to_surface = (is_b ? 0.5 : -0.5) * std::max(p.separation, 0.0) * cc.normal;
-          found.push_back({.point = body.rigid.position + rotation * local + to_surface,
-                           .normal = is_b ? cc.normal : Vec3(-cc.normal),
-                           .normal_impulse = p.total_normal_impulse,
-                           .approach_speed = p.approach_speed});
-        }
-      }
+      const OpenImpact& e = open_impacts_[work[i][2]];
+      const bool is_b = e.pair[1] == id;
+      restitution = std::max({restitution, body.surface.restitution, bodies_[work[i][1]].surface.restitution});
+      for (const OpenImpact::Point& p : e.points)
+        found.push_back({.point = body.rigid.position + rotation * (is_b ? p.local_b : p.local_a),
+                         .normal = rotation * (is_b ? p.normal_b : p.normal_a),
+                         .normal_impulse = p.impulse,
+                         .approach_speed = p.approach});
     }
+    analyse.emplace_back(id, first_other);
+    contacts_of.push_back(std::move(found));
+    restitution_of.push_back(restitution);
+  }
+  for (std::size_t k = 0; k < analyse.size(); ++k) {
+    const auto [id, other_id] = analyse[k];
     Body& body = bodies_[id];
     ImpactSettings settings = settings_of(body);
-    const Body& other = bodies_[first_other];
+    const Body& other = bodies_[other_id];
     settings.other_material = other.model ? other.model->fem.material : settings_.obstacle_material;
-    settings.restitution = restitution;
+    settings.restitution = restitution_of[k];
     if (body_count() >= settings_.max_bodies) settings.fracture.crack.max_cracks = 0;
     BodyState state;
     state.rigid = body.rigid;
     state.plastic_strain = body.plastic_strain;
     state.solver = body.solver;
-    auto result = analyze_impact(*body.model, state, found, settings);
+    auto result = analyze_impact(*body.model, state, contacts_of[k], settings);
     if (!result || !result->analysed) continue;
     ++stats_.impacts;
-    apply_impact(id, first_other, *result);
+    apply_impact(id, other_id, *result);
   }
+  for (OpenImpact& e : open_impacts_)
+    if (e.analysed) e.points.clear();
   std::erase_if(contacts_, [&](const Contact& c) { return bodies_[c.body_a].removed || bodies_[c.body_b].removed; });
+  std::erase_if(open_impacts_,
+                [&](const OpenImpact& e) { return bodies_[e.pair[0]].removed || bodies_[e.pair[1]].removed; });
 }
 
 void World::apply_impact(BodyId id, BodyId other, ImpactResult& r) {
@@ -728,7 +822,7 @@ void World::apply_impact(BodyId id, BodyId other, ImpactResult& r) {
     // Dented: the same tets, moved nodes; the pieces keep their tets.
     Body& body = bodies_[id];
     ImpactChild& child = r.children.front();
-    auto shape = reshape(*body.shape, *child.model);
+    auto shape = shape_from_clusters(body.shape->piece_tets, *child.model);
     if (shape) {
       body.shape = std::move(*shape);
       body.model = child.model;
@@ -743,7 +837,7 @@ void World::apply_impact(BodyId id, BodyId other, ImpactResult& r) {
   const Body parent = bodies_[id];
   std::vector<BodyId> born;
   for (ImpactChild& child : r.children) {
-    auto shape = make_tet_shape(*child.model);
+    auto shape = inherit_shape(*parent.shape, child.parent_tet, *child.model);
     if (!shape) {
       rec.debris_count += 1;
       rec.debris_mass += child.model->mass.mass;
@@ -881,7 +975,15 @@ std::uint64_t World::state_hash() const {
   h.add(std::int64_t{-1});
   for (const auto& p : until_apart_) h.add(p);
   h.add(std::int64_t{-1});
-  for (const auto& p : open_impacts_) h.add(p);
+  for (const OpenImpact& e : open_impacts_) {
+    h.add(e.pair);
+    h.add(std::array<std::int64_t, 2>{e.steps, e.analysed ? 1 : 0});
+    h.add(e.approach);
+    for (const OpenImpact::Point& p : e.points)
+      h.add(std::array<double, 14>{p.local_a.x(), p.local_a.y(), p.local_a.z(), p.local_b.x(), p.local_b.y(),
+                                   p.local_b.z(), p.normal_a.x(), p.normal_a.y(), p.normal_a.z(), p.normal_b.x(),
+                                   p.normal_b.y(), p.normal_b.z(), p.impulse, p.approach});
+  }
   return h.digest();
 }
 

@@ -1,0 +1,255 @@
+// analyze_impact: Hertz's load, what is held, and the children of a fracture: mass, volume,
+// momentum and eq. 22 velocities kept, crack faces marked; dents that keep the mass.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "shatter/fem/material.h"
+#include "shatter/mesh/generate.h"
+#include "shatter/mesh/mass_properties.h"
+#include "shatter/rigid/body.h"
+#include "shatter/rigid/impact.h"
+#include "shatter/rigid/integrate.h"
+#include "support/test_support.h"
+
+namespace shatter {
+namespace {
+
+BodyModel bar_model(const Material& material, std::array<Index, 3> cells = {16, 3, 3}) {
+  const TetMesh m = make_box_mesh({.min = Vec3(-0.2, -0.025, -0.025), .max = Vec3(0.2, 0.025, 0.025), .cells = cells});
+  auto model = make_body_model(m, material);
+  EXPECT_TRUE(model.ok());
+  return std::move(*model);
+}
+
+RigidState moving_state() {
+  RigidState r;
+  r.position = Vec3(1, 2, 3);
+  r.orientation = Quat(Eigen::AngleAxisd(0.3, Vec3(1, 2, 0.5).normalized()));
+  r.linear_velocity = Vec3(0.5, -3, 0.2);
+  r.angular_velocity = Vec3(2, -1, 4);
+  return r;
+}
+
+// A blow on the bar's middle from below (world), at `speed` with `impulse`.
+std::vector<ImpactContact> blow_at_middle(const RigidState& r, double impulse, double speed) {
+  const Mat3 R = r.orientation.toRotationMatrix();
+  return {{.point = r.position + R * Vec3(0, -0.025, 0),
+           .normal = R * Vec3(0, 1, 0),
+           .normal_impulse = impulse,
+           .approach_speed = speed}};
+}
+
+TEST(Hertz, FormulasAndScaling) {
+  const Material glass = *material_preset("glass");
+  const double e_star = hertz_effective_modulus(glass, glass);
+  EXPECT_NEAR(e_star, 0.5 * glass.youngs_modulus / (1 - 0.22 * 0.22), 1e-6 * e_star);
+  Material rigid = glass;
+  rigid.youngs_modulus = kInfinity;
+  EXPECT_NEAR(hertz_effective_modulus(glass, rigid), glass.youngs_modulus / (1 - 0.22 * 0.22), 1);
+  const HertzImpact h = hertz_impact(0.5, 4.43, 0.05, e_star);
+  // delta = (15 m v^2 / (16 E* sqrt R))^(2/5) by hand.
+  const double delta = std::pow(15 * 0.5 * 4.43 * 4.43 / (16 * e_star * std::sqrt(0.05)), 0.4);
+  EXPECT_NEAR(h.max_approach, delta, 1e-12);
+  EXPECT_NEAR(h.contact_time, 2.94 * delta / 4.43, 1e-12);
+  EXPECT_NEAR(h.contact_radius, std::sqrt(0.05 * delta), 1e-12);
+  // Energy: the work of the Hertz force up to delta, (8/15) E* sqrt(R) delta^(5/2), is the kinetic
+  // energy 1/2 m v^2.
+  EXPECT_NEAR(8.0 / 15.0 * e_star * std::sqrt(0.05) * std::pow(delta, 2.5), 0.5 * 0.5 * 4.43 * 4.43, 1e-9);
+  // Peak force ~ m^0.6 v^1.2.
+  EXPECT_NEAR(hertz_impact(1.0, 4.43, 0.05, e_star).peak_force / h.peak_force, std::pow(2.0, 0.6), 1e-9);
+  EXPECT_NEAR(hertz_impact(0.5, 8.86, 0.05, e_star).peak_force / h.peak_force, std::pow(2.0, 1.2), 1e-9);
+  EXPECT_EQ(hertz_impact(0.5, 0, 0.05, e_star).peak_force, 0);
+}
+
+TEST(ImpactAnalysis, SlowOrEmptyContactsAreNotAnalysed) {
+  const BodyModel bar = bar_model(*material_preset("glass"));
+  BodyState state = make_body_state(bar, moving_state());
+  auto r = analyze_impact(bar, state, blow_at_middle(state.rigid, 5, 0.5));
+  ASSERT_OK(r);
+  EXPECT_FALSE(r->analysed);
+  EXPECT_TRUE(r->children.empty());
+  r = analyze_impact(bar, state, {});
+  ASSERT_OK(r);
+  EXPECT_FALSE(r->analysed);
+  std::vector<ImpactContact> bad = blow_at_middle(state.rigid, 5, 3);
+  bad[0].point.x() = std::nan("");
+  EXPECT_FALSE(analyze_impact(bar, state, bad).ok());
+  bad = blow_at_middle(state.rigid, -1, 3);
+  EXPECT_FALSE(analyze_impact(bar, state, bad).ok());
+  BodyState wrong = make_body_state(bar);
+  wrong.plastic_strain.resize(3);
+  EXPECT_FALSE(analyze_impact(bar, wrong, blow_at_middle(state.rigid, 5, 3)).ok());
+}
+
+TEST(ImpactAnalysis, LoadGrowsWithSpeedAndImpulseAndIsSpread) {
+  const BodyModel bar = bar_model(*material_preset("glass"));
+  BodyState state = make_body_state(bar, moving_state());
+  ImpactSettings s;
+  s.fracture.crack.max_cracks = 0;
+  double last_force = 0, last_stress = 0;
+  for (const double v : {1.5, 3.0, 6.0}) {
+    auto r = analyze_impact(bar, state, blow_at_middle(state.rigid, 2.0 * v, v), s);
+    ASSERT_OK(r);
+    ASSERT_TRUE(r->analysed);
+    EXPECT_TRUE(r->solve.converged);
+    EXPECT_GT(r->force, last_force);
+    EXPECT_GT(r->max_principal_stress, last_stress);
+    EXPECT_GE(r->loaded_nodes, 2);  // never one node
+    EXPECT_GT(r->held_nodes, 0);
+    EXPECT_GT(r->patch_radius, 0);
+    EXPECT_NEAR(r->effective_mass, 2.0, 1e-12);
+    EXPECT_GT(r->contact_time, s.min_contact_time);
+    last_force = r->force;
+    last_stress = r->max_principal_stress;
+  }
+  // A heavier impact (more impulse at the same speed) loads more.
+  auto heavy = analyze_impact(bar, state, blow_at_middle(state.rigid, 24.0, 6.0), s);
+  ASSERT_OK(heavy);
+  EXPECT_GT(heavy->force, last_force);
+}
+
+TEST(ImpactAnalysis, InertiaReliefHoldsThreeNodes) {
+  const BodyModel bar = bar_model(*material_preset("glass"));
+  BodyState state = make_body_state(bar, moving_state());
+  ImpactSettings s;
+  s.fracture.crack.max_cracks = 0;
+  auto far = analyze_impact(bar, state, blow_at_middle(state.rigid, 10, 5), s);
+  s.hold = ImpactHold::inertia_relief;
+  auto relief = analyze_impact(bar, state, blow_at_middle(state.rigid, 10, 5), s);
+  ASSERT_OK(far);
+  ASSERT_OK(relief);
+  EXPECT_EQ(relief->held_nodes, 3);
+  EXPECT_TRUE(relief->solve.converged);
+  EXPECT_GT(far->held_nodes, 3);
+  // The same load near the blow: stresses of the same order either way.
+  EXPECT_GT(relief->max_principal_stress, 0.2 * far->max_principal_stress);
+  EXPECT_LT(relief->max_principal_stress, 5.0 * far->max_principal_stress);
+}
+
+// Total linear and angular momentum (about the world origin) of rigid bodies.
+struct Momentum {
+  Vec3 linear = Vec3::Zero();
+  Vec3 angular = Vec3::Zero();
+};
+void add_momentum(Momentum& m, const MassProperties& mass, const RigidState& r) {
+  const Mat3 R = r.orientation.toRotationMatrix();
+  m.linear += mass.mass * r.linear_velocity;
+  m.angular += mass.mass * r.position.cross(r.linear_velocity) + R * mass.inertia * R.transpose() * r.angular_velocity;
+}
+
+TEST(ImpactAnalysis, FragmentsKeepMassMomentumAndFollowEq22) {
+  const BodyModel bar = bar_model(*material_preset("glass"));
+  BodyState state = make_body_state(bar, moving_state());
+  ImpactSettings s;
+  s.min_fragment_fraction = 0;  // no debris: everything is kept
+  auto r = analyze_impact(bar, state, blow_at_middle(state.rigid, 60, 12), s);
+  ASSERT_OK(r);
+  ASSERT_TRUE(r->analysed);
+  ASSERT_GE(r->children.size(), 2U) << "max principal " << r->max_principal_stress;
+  EXPECT_FALSE(r->cracks.empty());
+  EXPECT_EQ(r->debris_count, 0);
+
+  Momentum parent, children;
+  add_momentum(parent, bar.mass, state.rigid);
+  double mass = 0, volume = 0;
+  Index crack_triangles = 0;
+  for (const ImpactChild& c : r->children) {
+    const BodyModel& m = *c.model;
+    mass += m.mass.mass;
+    volume += m.mass.volume;
+    add_momentum(children, m.mass, c.rigid);
+    EXPECT_LT(m.mass.center.norm(), 1e-12);  // body frame on the child's centre of mass
+    EXPECT_EQ(m.fem.material.youngs_modulus, bar.fem.material.youngs_modulus);
+    // Eq. 22.
+    const RigidState& p = state.rigid;
+    EXPECT_LT((c.rigid.angular_velocity - p.angular_velocity).norm(), 1e-15);
+    EXPECT_LT((c.rigid.linear_velocity - (p.linear_velocity + p.angular_velocity.cross(c.rigid.position - p.position)))
+                  .norm(),
+              1e-12);
+    EXPECT_LT(c.rigid.orientation.angularDistance(p.orientation), 1e-15);
+    // Every child node sits where the parent's material was (rest shapes placed by the poses).
+    const Mat3 R = p.orientation.toRotationMatrix();
+    for (std::size_t i = 0; i < m.mesh.positions.size(); ++i) {
+      const Vec3 world = c.rigid.position + R * m.mesh.positions[i];
+      const Vec3 in_parent = R.transpose() * (world - p.position);
+      EXPECT_LE(std::abs(in_parent.x()), 0.2 + 1e-12);
+      EXPECT_LE(std::abs(in_parent.y()), 0.025 + 1e-12);
+      EXPECT_LE(std::abs(in_parent.z()), 0.025 + 1e-12);
+    }
+    // Crack faces: flagged triangles are inside the parent's box, the others on its surface.
+    ASSERT_EQ(m.crack_face.size(), m.surface.triangles.size());
+    for (std::size_t t = 0; t < m.surface.triangles.size(); ++t) {
+      Vec3 centre = Vec3::Zero();
+      for (const Index v : m.surface.triangles[t]) centre += m.surface.positions[v] / 3.0;
+      centre += R.transpose() * (c.rigid.position - p.position);
+      const bool on_box = std::abs(std::abs(centre.x()) - 0.2) < 1e-9 || std::abs(std::abs(centre.y()) - 0.025) < 1e-9 ||
+                          std::abs(std::abs(centre.z()) - 0.025) < 1e-9;
+      if (m.crack_face[t]) {
+        ++crack_triangles;
+        EXPECT_FALSE(on_box) << "a crack face on the original surface";
+      } else {
+        EXPECT_TRUE(on_box) << "an original face inside the body";
+      }
+    }
+    // Rest coordinates for textures: the child's origin is where its centre was in the parent.
+    EXPECT_LT((m.material_origin - (bar.material_origin + R.transpose() * (c.rigid.position - p.position))).norm(),
+              1e-12);
+  }
+  EXPECT_GT(crack_triangles, 0);
+  EXPECT_NEAR(mass, bar.mass.mass, 1e-12 * bar.mass.mass);
+  EXPECT_NEAR(volume, bar.mass.volume, 1e-12 * bar.mass.volume);
+  EXPECT_LT((children.linear - parent.linear).norm(), 1e-9 * parent.linear.norm());
+  EXPECT_LT((children.angular - parent.angular).norm(), 1e-9 * parent.angular.norm());
+}
+
+TEST(ImpactAnalysis, DebrisRulesKeepTheHeaviest) {
+  const BodyModel bar = bar_model(*material_preset("glass"));
+  BodyState state = make_body_state(bar, moving_state());
+  ImpactSettings s;
+  s.min_fragment_fraction = 0;
+  auto all = analyze_impact(bar, state, blow_at_middle(state.rigid, 60, 12), s);
+  ASSERT_OK(all);
+  ASSERT_GE(all->children.size(), 2U);
+  s.max_fragments = 1;
+  auto one = analyze_impact(bar, state, blow_at_middle(state.rigid, 60, 12), s);
+  ASSERT_OK(one);
+  ASSERT_EQ(one->children.size(), 1U);
+  double heaviest = 0, total = 0;
+  for (const ImpactChild& c : all->children) {
+    heaviest = std::max(heaviest, c.model->mass.mass);
+    total += c.model->mass.mass;
+  }
+  EXPECT_NEAR(one->children[0].model->mass.mass, heaviest, 1e-12 * total);
+  EXPECT_EQ(one->debris_count, static_cast<Index>(all->children.size()) - 1);
+  EXPECT_NEAR(one->debris_mass + heaviest, total, 1e-12 * total);
+}
+
+TEST(ImpactAnalysis, ClayDentsAndKeepsItsMass) {
+  const BodyModel block = bar_model(*material_preset("modelling_clay"), {8, 3, 3});
+  BodyState state = make_body_state(block, moving_state());
+  auto r = analyze_impact(block, state, blow_at_middle(state.rigid, 0.5, 3));
+  ASSERT_OK(r);
+  ASSERT_TRUE(r->analysed);
+  EXPECT_TRUE(r->dented);
+  EXPECT_TRUE(r->cracks.empty());
+  ASSERT_EQ(r->children.size(), 1U);
+  const ImpactChild& c = r->children[0];
+  EXPECT_EQ(c.model->mesh.num_tets(), block.mesh.num_tets());
+  EXPECT_NEAR(c.model->mass.mass, block.mass.mass, 1e-12 * block.mass.mass);
+  double max_strain = 0;
+  for (const double e : c.plastic_strain) max_strain = std::max(max_strain, e);
+  EXPECT_GT(max_strain, 0);
+  // The rest shape moved near the blow.
+  double moved = 0;
+  for (std::size_t i = 0; i < block.mesh.positions.size(); ++i)
+    moved = std::max(moved, ((c.model->mesh.positions[i] + c.model->material_origin) -
+                             (block.mesh.positions[i] + block.material_origin))
+                                .norm());
+  EXPECT_GT(moved, 1e-5);
+  EXPECT_TRUE(c.model->crack_face.size() == c.model->surface.triangles.size());
+}
+
+}  // namespace
+}  // namespace shatter
