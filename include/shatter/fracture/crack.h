@@ -36,6 +36,11 @@ struct CrackOptions {
   /// under an impact then split along several planes from near the blow, as they shatter (the
   /// regions are recomputed on the cut mesh, so a branch stays on its side of earlier cracks).
   bool branch = false;
+  /// The tensile criterion reads a yielded tet's stress returned to the yield surface
+  /// (sigma x sigma_y / sigma_vm when sigma_vm > sigma_y). An elastic solve over-states the stress
+  /// of a tet that yields; with this a ductile material (yield below its strength: clay, steel)
+  /// tears only by plastic strain (PlasticityOptions::max_plastic_strain), never brittly.
+  bool return_to_yield = false;
 };
 
 /// One planned crack.

@@ -80,16 +80,20 @@ struct ImpactSettings {
   double patch_facing = 0.25;
   /// The Hertz contact time is kept within [min_contact_time, max_contact_time], s.
   double min_contact_time = 1e-5;
-  double max_contact_time = 1e-2;
+  double max_contact_time = 0.05;
   /// Coefficient of restitution of the collision: the impulse J = (1 + e) m_eff v gives the
   /// effective mass.
   double restitution = 0;
   /// Fracture and plasticity (the accumulated plastic strain comes from the state). Cracks branch
-  /// by default (CrackOptions::branch): a brittle body breaks into several pieces near the blow.
+  /// by default (CrackOptions::branch): a brittle body breaks into several pieces near the blow;
+  /// and yielded tets' stresses are returned to the yield surface for the tensile criterion
+  /// (CrackOptions::return_to_yield): ductile bodies dent, and tear only by plastic strain.
   FractureOptions fracture = default_impact_fracture_options();
   /// The static solve. Its PCG warm start is off by default, so that an event's outcome depends
   /// only on the body and its contacts, not on the solver's history (replays and restored
   /// snapshots give the same bits); the pattern and symbolic analysis are reused either way.
+  /// Newton iterations and load halvings are capped (12 and 3) to bound an impact's time: a solve
+  /// that does not converge goes on with the fraction of the load it reached.
   StaticSolverOptions solver = default_impact_solver_options();
   /// Children lighter than this fraction of the parent's mass, or than min_fragment_mass (kg), are
   /// removed as debris (their mass is reported), and at most max_fragments children are kept, the

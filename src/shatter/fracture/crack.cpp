@@ -64,12 +64,20 @@ std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStr
 
   // Candidates: ductile origins first (in the given order), then tets over strength by decreasing
   // largest principal stress (ties: lower index).
+  // The largest principal stress the criterion reads per tet (returned to the yield surface when
+  // asked).
+  const double yield = material.yield_stress;
+  auto tension = [&](Index e) {
+    const TetStress& s = stress[e];
+    if (options.return_to_yield && s.von_mises > yield) return s.principal[0] * (yield / s.von_mises);
+    return s.principal[0];
+  };
   std::vector<Index> over;
   if (std::isfinite(strength))
     for (Index e = 0; e < mesh.num_tets(); ++e)
-      if (stress[e].principal[0] > strength) over.push_back(e);
+      if (tension(e) > strength) over.push_back(e);
   std::sort(over.begin(), over.end(), [&](Index a, Index b) {
-    const double sa = stress[a].principal[0], sb = stress[b].principal[0];
+    const double sa = tension(a), sb = tension(b);
     return sa != sb ? sa > sb : a < b;
   });
   if (over.empty() && ductile_origins.empty()) return plans;
@@ -80,7 +88,7 @@ std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStr
     if (static_cast<int>(plans.size()) >= options.max_cracks || (taken[e] && !options.branch)) return;
     const Vec3 c = centroid(mesh, e);
     const double r_min = options.min_radius_edges * longest_edge(mesh, e);
-    const double r = ductile ? r_min : crack_radius(stress[e].principal[0], strength, k, r0, r_min);
+    const double r = ductile ? r_min : crack_radius(tension(e), strength, k, r0, r_min);
     for (const CrackPlan& p : plans) {
       const double keep_off =
           options.branch ? options.min_radius_edges * longest_edge(mesh, p.origin_tet) : p.radius;
@@ -90,7 +98,7 @@ std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStr
     p.origin_tet = e;
     p.origin = c;
     p.normal = stress[e].directions.col(0).normalized();
-    p.stress = stress[e].principal[0];
+    p.stress = tension(e);
     p.radius = r;
     p.ductile = ductile;
     p.tets = crack_region(mesh, incidence, e, c, r);

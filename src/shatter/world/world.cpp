@@ -818,11 +818,13 @@ void World::apply_impact(BodyId id, BodyId other, ImpactResult& r) {
     events_.impacts.push_back(rec);
     return;
   }
-  if (r.children.size() == 1 && r.cracks.empty()) {
-    // Dented: the same tets, moved nodes; the pieces keep their tets.
+  if (r.children.size() == 1) {
+    // Dented, or cracked but whole: the body goes on under its id with the new model. A dent keeps
+    // the tets (the pieces keep theirs); a crack's pieces come from the old clusters.
     Body& body = bodies_[id];
     ImpactChild& child = r.children.front();
-    auto shape = shape_from_clusters(body.shape->piece_tets, *child.model);
+    auto shape = r.cracks.empty() ? shape_from_clusters(body.shape->piece_tets, *child.model)
+                                  : inherit_shape(*body.shape, child.parent_tet, *child.model);
     if (shape) {
       body.shape = std::move(*shape);
       body.model = child.model;
