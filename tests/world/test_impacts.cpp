@@ -2,6 +2,7 @@
 // every fragmentation, and the state hash through impacts.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -78,7 +79,7 @@ DropOutcome drop(const std::shared_ptr<const BodyModel>& model, double height, c
       if (verbose())
         std::printf("  t %.3f body %d v %.2f J %.3g Tc %.3g F %.3g s1 %.3g vm %.3g conv %d cracks %d frags %d "
                     "debris %d solve %.2f ms fracture %.2f ms\n",
-                    e.time, static_cast<int>(e.body), e.approach_speed, e.impulse, e.contact_time, e.force,
+                    e.time, static_cast<int>(e.body.index), e.approach_speed, e.impulse, e.contact_time, e.force,
                     e.max_principal_stress, e.max_von_mises, e.converged, static_cast<int>(e.cracks),
                     static_cast<int>(e.fragments), static_cast<int>(e.debris_count), e.solve_ms, e.fracture_ms);
       ++out.impacts;
@@ -172,8 +173,10 @@ TEST(Impacts, VaseBreakHeightHoldsUnderRefinement) {
 // Sum of masses of the live dynamic bodies plus what the debris rules removed.
 double live_mass(const World& w, double debris) {
   double m = debris;
-  for (BodyId i = 0; i < w.body_count(); ++i)
+  for (Index slot = 0; slot < w.body_count(); ++slot) {
+    const BodyId i = w.body_id(slot);
     if (!w.removed(i) && w.body_type(i) == BodyType::dynamic && w.model(i)) m += w.model(i)->mass.mass;
+  }
   return m;
 }
 
@@ -230,7 +233,8 @@ TEST(Impacts, FragmentationsConserveMassAndMomentum) {
   EXPECT_GE(fragmentations, 1);
   std::printf("%d fragmentations, %d bodies live\n", fragmentations, static_cast<int>(w.live_body_count()));
   // Every live piece is a valid mesh above the ground.
-  for (BodyId i = 1; i < w.body_count(); ++i) {
+  for (Index slot = 1; slot < w.body_count(); ++slot) {
+    const BodyId i = w.body_id(slot);
     if (w.removed(i)) continue;
     EXPECT_FALSE(validate_mesh(w.model(i)->mesh).has_errors());
     EXPECT_GT(w.rigid_state(i).position.y(), -0.01);
@@ -244,8 +248,9 @@ TEST(Impacts, ClayTeddyDentsMoreWithEachDrop) {
   // Modelling clay stretches far before it tears.
   auto clay = std::make_shared<ImpactSettings>();
   clay->fracture.plasticity.max_plastic_strain = 1.0;
-  ASSERT_OK(w.add_body(teddy, {.rigid = drop_pose(*teddy, 0.5, Quat::Identity(), 1.0 / 60, 0), .impact = clay}));
-  const BodyId id = 1;
+  auto added = w.add_body(teddy, {.rigid = drop_pose(*teddy, 0.5, Quat::Identity(), 1.0 / 60, 0), .impact = clay});
+  ASSERT_OK(added);
+  const BodyId id = *added;
   double last_strain = 0, last_change = 0;
   const TetMesh& rest0 = teddy->mesh;
   for (int drop_no = 0; drop_no < 5; ++drop_no) {
@@ -273,7 +278,7 @@ TEST(Impacts, ClayTeddyDentsMoreWithEachDrop) {
     last_strain = strain;
     last_change = change;
     // Lift it again.
-    w.set_rigid_state(id, drop_pose(m, 0.5, w.rigid_state(id).orientation, 1.0 / 60, 0));
+    ASSERT_OK(w.set_rigid_state(id, drop_pose(m, 0.5, w.rigid_state(id).orientation, 1.0 / 60, 0)));
   }
 }
 
@@ -282,13 +287,14 @@ TEST(Impacts, CinderBlockDroppedOnAnotherBreaksIt) {
   World w;
   w.add_plane({.normal = Vec3::UnitY(), .offset = 0});
   const RigidState lower = drop_pose(*block, 0.0005, Quat::Identity(), 1.0 / 60, 0);
-  ASSERT_OK(w.add_body(block, {.rigid = lower}));
+  auto lower_id = w.add_body(block, {.rigid = lower});
+  ASSERT_OK(lower_id);
   RigidState upper = lower;
   upper.position.y() += 0.19 + 1.0;
   upper.orientation = Quat(Eigen::AngleAxisd(0.5 * std::numbers::pi, Vec3::UnitY()));
   ASSERT_OK(w.add_body(block, {.rigid = upper}));
   for (int step = 0; step < 60; ++step) w.step();
-  EXPECT_TRUE(w.removed(1)) << "the lower block did not break";
+  EXPECT_TRUE(w.removed(*lower_id)) << "the lower block did not break";
 }
 
 TEST(Impacts, RestingBodiesNeverCrack) {
@@ -371,14 +377,64 @@ TEST(Impacts, Soak) {
       for (const ImpactRecord& e : w.events().impacts) debris += e.debris_mass;
     }
     EXPECT_NEAR(live_mass(w, debris), mass0, 1e-11 * mass0) << "round " << round;
-    for (BodyId i = 1; i < w.body_count(); ++i) {
+    for (Index slot = 1; slot < w.body_count(); ++slot) {
+      const BodyId i = w.body_id(slot);
       if (w.removed(i)) continue;
       const RigidState& r = w.rigid_state(i);
       EXPECT_TRUE(r.position.allFinite() && r.linear_velocity.allFinite() && r.angular_velocity.allFinite());
-      EXPECT_GT(r.position.y(), -0.05) << "round " << round << " body " << i << " fell through the ground";
+      EXPECT_GT(r.position.y(), -0.05) << "round " << round << " body " << i.index << " fell through the ground";
       EXPECT_FALSE(validate_mesh(w.model(i)->mesh).has_errors());
     }
   }
+}
+
+TEST(Impacts, IdsOfRemovedAndRestoredBodiesAreCaught) {
+  World w;
+  w.add_plane({.normal = Vec3::UnitY(), .offset = 0});
+  auto vase_id = w.add_body(vase(), {.rigid = drop_pose(*vase(), 2.0, orientation_k(2), 1.0 / 60, 0)});
+  ASSERT_OK(vase_id);
+  const WorldSnapshot before = w.save();
+  std::vector<BodyId> children;
+  for (int i = 0; i < 60 && children.empty(); ++i) {
+    w.step();
+    for (const FragmentRecord& f : w.events().fragments) children.push_back(f.body);
+  }
+  ASSERT_GE(children.size(), 2U);
+  EXPECT_TRUE(w.removed(*vase_id));
+  EXPECT_FALSE(w.apply_impulse(*vase_id, Vec3(1, 0, 0), Vec3::Zero()).ok());  // removed
+  EXPECT_FALSE(w.set_rigid_state(*vase_id, RigidState{}).ok());
+  EXPECT_TRUE(w.valid(children[0]));
+  EXPECT_EQ(w.parent(children[0]), *vase_id);
+  EXPECT_FALSE(w.apply_impulse(children[0], Vec3(std::nan(""), 0, 0), Vec3::Zero()).ok());
+  EXPECT_TRUE(w.apply_impulse(children[0], Vec3(0.1, 0, 0), w.rigid_state(children[0]).position).ok());
+  // A child's surface: crack faces, rest coordinates inside the original vase's box.
+  const BodySurface surf = w.surface(children[0]);
+  ASSERT_EQ(surf.rest.size(), surf.positions.size());
+  ASSERT_EQ(surf.crack_face.size(), surf.triangles.size());
+  EXPECT_GT(std::count(surf.crack_face.begin(), surf.crack_face.end(), 1), 0);
+  EXPECT_GT(std::count(surf.crack_face.begin(), surf.crack_face.end(), 0), 0);
+  Aabb original;
+  for (const Vec3& p : vase()->mesh.positions) original.extend(p + vase()->material_origin);
+  for (const Vec3& r : surf.rest)
+    EXPECT_TRUE((r.array() >= original.min.array() - 1e-9).all() && (r.array() <= original.max.array() + 1e-9).all());
+  // Back to before the fall: the children's ids are stale; the vase is back; new fragments reuse
+  // the slots under new generations.
+  ASSERT_OK(w.restore(before));
+  EXPECT_FALSE(w.valid(children[0]));
+  EXPECT_FALSE(w.removed(*vase_id));
+  EXPECT_FALSE(w.wake(children[0]).ok());
+  std::vector<BodyId> again;
+  for (int i = 0; i < 60 && again.empty(); ++i) {
+    w.step();
+    for (const FragmentRecord& f : w.events().fragments) again.push_back(f.body);
+  }
+  ASSERT_EQ(again.size(), children.size());
+  EXPECT_EQ(again[0].index, children[0].index);
+  EXPECT_NE(again[0].generation, children[0].generation);
+  EXPECT_FALSE(w.valid(children[0]));
+  EXPECT_TRUE(w.valid(again[0]));
+  EXPECT_FALSE(w.exclude_pair(again[0], again[0]).ok());
+  EXPECT_FALSE(w.exclude_pair(again[0], children[0]).ok());
 }
 
 }  // namespace

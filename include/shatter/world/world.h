@@ -33,8 +33,15 @@
 
 namespace shatter {
 
-/// Index of a body in its world (bodies are never renumbered).
-using BodyId = Index;
+/// A body of a world: its slot and which body has held that slot. Slots are never renumbered; a
+/// slot is given to a new body only after restore() went back to before its body was made, and
+/// the generation then tells the two apart, so a stale id is caught (World::valid).
+struct BodyId {
+  Index index = -1;              ///< slot in the world
+  std::uint32_t generation = 0;  ///< bodies that held the slot before this one
+  friend bool operator==(const BodyId&, const BodyId&) = default;
+  friend auto operator<=>(const BodyId&, const BodyId&) = default;
+};
 
 /// How a body moves.
 enum class BodyType : std::uint8_t {
@@ -118,8 +125,8 @@ struct WorldSettings {
 
 /// One impact analysis of one body (a row of StepEvents::impacts).
 struct ImpactRecord {
-  BodyId body = -1;       ///< the body analysed
-  BodyId other = -1;      ///< the body it hit (the lowest id when several events opened at once)
+  BodyId body;   ///< the body analysed
+  BodyId other;  ///< the body it hit (the lowest slot when several events opened at once)
   double time = 0;        ///< end of the step, s
   Vec3 point = Vec3::Zero();  ///< impulse-weighted contact point, world, m
   double approach_speed = 0;  ///< m/s
@@ -140,7 +147,7 @@ struct ImpactRecord {
 
 /// One crack (a row of StepEvents::cracks).
 struct CrackRecord {
-  BodyId body = -1;               ///< the body that cracked
+  BodyId body;                    ///< the body that cracked
   Vec3 origin = Vec3::Zero();     ///< a point of the crack plane, world, m
   Vec3 normal = Vec3::UnitX();    ///< the plane's normal, world
   double radius = 0;              ///< r_frac, m
@@ -149,8 +156,8 @@ struct CrackRecord {
 
 /// A body born from a fracture (a row of StepEvents::fragments).
 struct FragmentRecord {
-  BodyId parent = -1;  ///< removed body it came from
-  BodyId body = -1;    ///< the new body
+  BodyId parent;  ///< removed body it came from
+  BodyId body;    ///< the new body
   double mass = 0;     ///< kg
 };
 
@@ -164,8 +171,8 @@ struct StepEvents {
 
 /// A contact between two bodies (one manifold), with what the solver did in the last step.
 struct Contact {
-  BodyId body_a = -1;
-  BodyId body_b = -1;
+  Index body_a = -1;  ///< slot of body A (World::body_id gives its id); body_a < body_b
+  Index body_b = -1;  ///< slot of body B
   Index piece_a = -1;            ///< convex piece of A (-1: a plane or the tet mode)
   Index piece_b = -1;            ///< convex piece of B
   ContactConstraint constraint;  ///< normal, points, impulses (summed over the step), approach speeds
@@ -173,6 +180,14 @@ struct Contact {
 };
 
 class WorldSnapshot;
+
+/// A body's boundary at its pose (World::surface).
+struct BodySurface {
+  std::vector<Vec3> positions;        ///< world, m (#vertices)
+  std::vector<Vec3> rest;             ///< rest coordinates for solid textures, m (#vertices)
+  std::vector<TriIndices> triangles;  ///< outward (#triangles)
+  std::vector<std::uint8_t> crack_face;  ///< 1 where a crack opened the face (#triangles)
+};
 
 /// Counts of the last step, for benchmarks and tests.
 struct StepStats {
@@ -203,31 +218,46 @@ class World {
   /// A static plane (the ground): solid below `plane.normal . x = plane.offset`.
   BodyId add_plane(const Plane& plane, const SurfaceMaterial& surface = {}, const CollisionFilter& filter = {});
 
+  // Ids. Every accessor below checks its id and stops the program with a message on an invalid
+  // one (as Box2D asserts); the calls that change a body return an error instead.
+  /// Whether the id names a body of this world now (removed bodies stay valid: their last state
+  /// can be read).
+  [[nodiscard]] bool valid(BodyId id) const {
+    return id.index >= 0 && id.index < body_count() && bodies_[id.index].generation == id.generation;
+  }
+  /// The id of the body in a slot (0 <= slot < body_count()).
+  [[nodiscard]] BodyId body_id(Index slot) const;
+
   /// Advance by one time step.
   void step();
 
   // Bodies.
   [[nodiscard]] Index body_count() const { return static_cast<Index>(bodies_.size()); }
-  [[nodiscard]] BodyType body_type(BodyId id) const { return bodies_[id].type; }
-  [[nodiscard]] const RigidState& rigid_state(BodyId id) const { return bodies_[id].rigid; }
-  [[nodiscard]] const RigidInertia& inertia(BodyId id) const { return bodies_[id].inertia; }
+  [[nodiscard]] BodyType body_type(BodyId id) const { return body(id).type; }
+  [[nodiscard]] const RigidState& rigid_state(BodyId id) const { return body(id).rigid; }
+  [[nodiscard]] const RigidInertia& inertia(BodyId id) const { return body(id).inertia; }
   /// The tet model of a body (null for planes and hulls).
-  [[nodiscard]] const BodyModel* model(BodyId id) const { return bodies_[id].model.get(); }
+  [[nodiscard]] const BodyModel* model(BodyId id) const { return body(id).model.get(); }
   /// The convex pieces of a body (body frame).
   [[nodiscard]] std::span<const ConvexHull> pieces(BodyId id) const;
-  [[nodiscard]] bool awake(BodyId id) const { return bodies_[id].awake; }
-  /// Set pose and velocities (wakes the body).
-  void set_rigid_state(BodyId id, const RigidState& rigid);
-  /// An impulse J (N s) at world point p (wakes the body).
-  void apply_impulse(BodyId id, const Vec3& impulse, const Vec3& point);
-  /// Wake a body (its island follows at the next step).
-  void wake(BodyId id);
+  [[nodiscard]] bool awake(BodyId id) const { return body(id).awake; }
+  /// Set pose and velocities (wakes the body). Errors: an invalid or removed id, a non-finite
+  /// state.
+  Result<void> set_rigid_state(BodyId id, const RigidState& rigid);
+  /// An impulse J (N s) at world point p (wakes the body; nothing for static and kinematic
+  /// bodies). Errors: an invalid or removed id, non-finite values.
+  Result<void> apply_impulse(BodyId id, const Vec3& impulse, const Vec3& point);
+  /// Wake a body (its island follows at the next step). Errors: an invalid or removed id.
+  Result<void> wake(BodyId id);
   /// Whether the body was replaced by its fragments (it then takes no further part).
-  [[nodiscard]] bool removed(BodyId id) const { return bodies_[id].removed; }
-  /// The body a fragment broke from (-1 for bodies the user added).
-  [[nodiscard]] BodyId parent(BodyId id) const { return bodies_[id].parent; }
+  [[nodiscard]] bool removed(BodyId id) const { return body(id).removed; }
+  /// The body a fragment broke from (index -1 for bodies the user added).
+  [[nodiscard]] BodyId parent(BodyId id) const;
   /// Accumulated plastic strain per tet of the body's current model (empty for planes and hulls).
-  [[nodiscard]] std::span<const double> plastic_strain(BodyId id) const { return bodies_[id].plastic_strain; }
+  [[nodiscard]] std::span<const double> plastic_strain(BodyId id) const { return body(id).plastic_strain; }
+  /// The body's boundary surface at its pose: world positions, triangles, crack flags and rest
+  /// coordinates for solid textures (empty for planes and hulls).
+  [[nodiscard]] BodySurface surface(BodyId id) const;
   /// Number of bodies not removed.
   [[nodiscard]] Index live_body_count() const;
   /// A world box around the body at its pose: its body-frame box turned and boxed again, so not
@@ -235,10 +265,11 @@ class World {
   [[nodiscard]] Aabb bounds(BodyId id) const;
 
   // Pairs.
-  /// a and b never touch.
-  void exclude_pair(BodyId a, BodyId b);
+  /// a and b never touch. Errors: an invalid id, or a == b.
+  Result<void> exclude_pair(BodyId a, BodyId b);
   /// a and b do not touch until the narrow phase first finds them apart (siblings of one crack).
-  void exclude_until_apart(BodyId a, BodyId b);
+  /// Errors: an invalid id, or a == b.
+  Result<void> exclude_until_apart(BodyId a, BodyId b);
 
   /// Contacts of the last step, sorted by (body_a, body_b, piece_a, piece_b).
   [[nodiscard]] std::span<const Contact> contacts() const { return contacts_; }
@@ -289,16 +320,23 @@ class World {
     double sleep_time = 0;
     bool removed = false;
     bool breakable = true;
-    BodyId parent = -1;
+    Index parent = -1;
+    std::uint32_t generation = 0;
     std::shared_ptr<const ImpactSettings> impact;
     std::vector<double> plastic_strain;     ///< per tet of model
     std::shared_ptr<StaticSolver> solver;  ///< kept between impacts
   };
   struct PairRef {
-    BodyId a, b;
+    Index a, b;
   };
 
-  BodyId add(const BodyDef& def, std::shared_ptr<const Shape> shape, std::shared_ptr<const BodyModel> model = {});
+  Index add(const BodyDef& def, std::shared_ptr<const Shape> shape, std::shared_ptr<const BodyModel> model = {});
+  /// The body of a valid id (stops the program on an invalid one).
+  [[nodiscard]] const Body& body(BodyId id) const;
+  void wake_slot(Index slot);
+  [[nodiscard]] Aabb slot_bounds(Index slot) const;
+  /// The slot of a valid, not removed id, or an error naming `what` was called.
+  [[nodiscard]] Result<Index> live_slot(BodyId id, const char* what) const;
   /// Convex pieces (and the paper's contact shape) of a tet model.
   [[nodiscard]] Result<std::shared_ptr<const Shape>> make_tet_shape(const BodyModel& model) const;
   /// The shape of a model added by the user: built once per process for each model and settings
@@ -315,25 +353,25 @@ class World {
                                                                    const BodyModel& model) const;
   void process_impacts();
   /// Replace body id by the outcome of its impact analysis; records the events.
-  void apply_impact(BodyId id, BodyId other, ImpactResult& r);
+  void apply_impact(Index id, Index other, ImpactResult& r);
   [[nodiscard]] double motion_bound(const Body& b) const;
   void find_pairs(std::vector<PairRef>& pairs);
   void narrow_phase(const std::vector<PairRef>& pairs);
   void update_islands_and_wake();
   void solve();
   void update_sleep();
-  [[nodiscard]] bool pair_excluded(BodyId a, BodyId b) const;
+  [[nodiscard]] bool pair_excluded(Index a, Index b) const;
 
   WorldSettings settings_;
   std::vector<Body> bodies_;
   std::vector<Contact> contacts_;                   ///< sorted by key
-  std::vector<std::array<BodyId, 2>> excluded_;     ///< sorted
-  std::vector<std::array<BodyId, 2>> until_apart_;  ///< sorted
+  std::vector<std::array<Index, 2>> excluded_;     ///< sorted slot pairs
+  std::vector<std::array<Index, 2>> until_apart_;  ///< sorted slot pairs
   /// An impact event: a pair that started touching fast enough, until it stops touching. Its
   /// impulses are summed until the pair stops approaching (a collision the solver resolves over
   /// two steps counts whole), then each breakable body of it is analysed once.
   struct OpenImpact {
-    std::array<BodyId, 2> pair{};
+    std::array<Index, 2> pair{};
     int steps = 0;          ///< steps it has been open
     bool analysed = false;  ///< its analysis is done
     double approach = 0;    ///< fastest approach of its points, m/s
@@ -348,6 +386,7 @@ class World {
   std::vector<OpenImpact> open_impacts_;  ///< sorted by pair
   std::int64_t step_count_ = 0;
   std::uint64_t world_id_ = 0;  ///< tells this world's snapshots from others'
+  std::vector<std::uint32_t> generations_;  ///< generations issued per slot (not part of the state)
   StepStats stats_;
   StepEvents events_;
   BroadPhase broad_phase_;

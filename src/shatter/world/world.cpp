@@ -65,12 +65,12 @@ void unite(std::vector<Index>& parent, Index a, Index b) {
   parent[a] = b;
 }
 
-bool contains_pair(const std::vector<std::array<BodyId, 2>>& sorted, BodyId a, BodyId b) {
-  return std::binary_search(sorted.begin(), sorted.end(), std::array<BodyId, 2>{a, b});
+bool contains_pair(const std::vector<std::array<Index, 2>>& sorted, Index a, Index b) {
+  return std::binary_search(sorted.begin(), sorted.end(), std::array<Index, 2>{a, b});
 }
 
-void insert_pair(std::vector<std::array<BodyId, 2>>& sorted, BodyId a, BodyId b) {
-  const std::array<BodyId, 2> key{std::min(a, b), std::max(a, b)};
+void insert_pair(std::vector<std::array<Index, 2>>& sorted, Index a, Index b) {
+  const std::array<Index, 2> key{std::min(a, b), std::max(a, b)};
   const auto it = std::lower_bound(sorted.begin(), sorted.end(), key);
   if (it == sorted.end() || *it != key) sorted.insert(it, key);
 }
@@ -82,8 +82,8 @@ struct World::State {
   std::uint64_t world_id = 0;
   std::vector<Body> bodies;
   std::vector<Contact> contacts;
-  std::vector<std::array<BodyId, 2>> excluded;
-  std::vector<std::array<BodyId, 2>> until_apart;
+  std::vector<std::array<Index, 2>> excluded;
+  std::vector<std::array<Index, 2>> until_apart;
   std::vector<World::OpenImpact> open_impacts;
   std::int64_t step_count = 0;
 };
@@ -93,7 +93,7 @@ World::World(const WorldSettings& settings) : settings_(settings) {
   world_id_ = next_id.fetch_add(1);
 }
 
-BodyId World::add(const BodyDef& def, std::shared_ptr<const Shape> shape, std::shared_ptr<const BodyModel> model) {
+Index World::add(const BodyDef& def, std::shared_ptr<const Shape> shape, std::shared_ptr<const BodyModel> model) {
   Body body;
   body.type = def.type;
   body.model = std::move(model);
@@ -116,8 +116,56 @@ BodyId World::add(const BodyDef& def, std::shared_ptr<const Shape> shape, std::s
     body.rigid.angular_velocity.setZero();
     body.awake = false;
   }
+  // A slot that restore() freed gets a new generation, so ids of the body it held are stale.
+  const auto slot = static_cast<Index>(bodies_.size());
+  if (slot < static_cast<Index>(generations_.size()))
+    body.generation = ++generations_[slot];
+  else
+    generations_.push_back(0);
   bodies_.push_back(std::move(body));
-  return static_cast<BodyId>(bodies_.size() - 1);
+  return slot;
+}
+
+BodyId World::body_id(Index slot) const {
+  SHATTER_CHECK(slot >= 0 && slot < body_count());
+  return {slot, bodies_[slot].generation};
+}
+
+const World::Body& World::body(BodyId id) const {
+  SHATTER_CHECK(valid(id));
+  return bodies_[id.index];
+}
+
+Result<Index> World::live_slot(BodyId id, const char* what) const {
+  if (!valid(id))
+    return make_error(std::string(what) + ": body id (" + std::to_string(id.index) + ", generation " +
+                      std::to_string(id.generation) + ") is not a body of this world (stale or never made)");
+  if (bodies_[id.index].removed)
+    return make_error(std::string(what) + ": body " + std::to_string(id.index) + " was removed (it broke)");
+  return id.index;
+}
+
+BodyId World::parent(BodyId id) const {
+  const Index p = body(id).parent;
+  return p < 0 ? BodyId{} : body_id(p);
+}
+
+BodySurface World::surface(BodyId id) const {
+  const Body& b = body(id);
+  BodySurface out;
+  if (!b.model) return out;
+  const TriSurface& s = b.model->surface;
+  const Mat3 R = b.rigid.orientation.toRotationMatrix();
+  out.positions.reserve(s.positions.size());
+  out.rest.reserve(s.positions.size());
+  for (const Vec3& p : s.positions) {
+    out.positions.push_back(b.rigid.position + R * p);
+    out.rest.push_back(b.model->material_origin + p);
+  }
+  out.triangles = s.triangles;
+  out.crack_face = b.model->crack_face;
+  out.crack_face.resize(s.triangles.size(), 0);
+  return out;
 }
 
 Result<BodyId> World::add_body(std::shared_ptr<const BodyModel> model, const BodyDef& def) {
@@ -127,7 +175,7 @@ Result<BodyId> World::add_body(std::shared_ptr<const BodyModel> model, const Bod
     return make_error("add_body: a dynamic body needs a positive mass (check the material density)");
   auto shape = shared_tet_shape(model);
   if (!shape) return make_error("add_body: " + shape.error().message);
-  return add(def, std::move(*shape), std::move(model));
+  return body_id(add(def, std::move(*shape), std::move(model)));
 }
 
 Result<std::shared_ptr<const World::Shape>> World::make_tet_shape(const BodyModel& model) const {
@@ -237,7 +285,7 @@ Result<BodyId> World::add_hull(ConvexHull hull, const BodyDef& def) {
   shape->local_bounds = hull.bounds;
   for (const Vec3& v : hull.vertices) shape->radius = std::max(shape->radius, v.norm());
   shape->pieces.push_back(std::move(hull));
-  return add(def, std::move(shape));
+  return body_id(add(def, std::move(shape)));
 }
 
 Result<BodyId> World::add_box(const Vec3& half_extents, const BodyDef& def) {
@@ -257,42 +305,60 @@ BodyId World::add_plane(const Plane& plane, const SurfaceMaterial& surface, cons
   shape->is_plane = true;
   shape->plane = plane;
   shape->plane.normal.normalize();
-  return add({.type = BodyType::static_body, .surface = surface, .filter = filter}, std::move(shape));
+  return body_id(add({.type = BodyType::static_body, .surface = surface, .filter = filter}, std::move(shape)));
 }
 
-std::span<const ConvexHull> World::pieces(BodyId id) const { return bodies_[id].shape->pieces; }
+std::span<const ConvexHull> World::pieces(BodyId id) const { return body(id).shape->pieces; }
 
-void World::set_rigid_state(BodyId id, const RigidState& rigid) {
-  Body& b = bodies_[id];
-  if (b.removed) return;
+Result<void> World::set_rigid_state(BodyId id, const RigidState& rigid) {
+  SHATTER_TRY(slot, live_slot(id, "set_rigid_state"));
+  if (!rigid.position.allFinite() || !rigid.orientation.coeffs().allFinite() || !rigid.linear_velocity.allFinite() ||
+      !rigid.angular_velocity.allFinite() || !(rigid.orientation.norm() > 0))
+    return make_error("set_rigid_state: the state is not finite, or the orientation is zero");
+  Body& b = bodies_[*slot];
   b.rigid = rigid;
   b.rigid.orientation.normalize();
   if (b.type == BodyType::static_body) {
     b.rigid.linear_velocity.setZero();
     b.rigid.angular_velocity.setZero();
-    return;
+    return {};
   }
-  wake(id);
+  wake_slot(*slot);
+  return {};
 }
 
-void World::apply_impulse(BodyId id, const Vec3& impulse, const Vec3& point) {
-  Body& b = bodies_[id];
-  if (b.type != BodyType::dynamic || b.removed) return;
+Result<void> World::apply_impulse(BodyId id, const Vec3& impulse, const Vec3& point) {
+  SHATTER_TRY(slot, live_slot(id, "apply_impulse"));
+  if (!impulse.allFinite() || !point.allFinite()) return make_error("apply_impulse: the impulse or point is not finite");
+  Body& b = bodies_[*slot];
+  if (b.type != BodyType::dynamic) return {};
   b.rigid.linear_velocity += b.inertia.inverse_mass * impulse;
   b.rigid.angular_velocity +=
       world_inverse_inertia(b.inertia, b.rigid.orientation) * (point - b.rigid.position).cross(impulse);
-  wake(id);
+  wake_slot(*slot);
+  return {};
 }
 
-void World::wake(BodyId id) {
-  Body& b = bodies_[id];
+Result<void> World::wake(BodyId id) {
+  SHATTER_TRY(slot, live_slot(id, "wake"));
+  wake_slot(*slot);
+  return {};
+}
+
+void World::wake_slot(Index i) {
+  Body& b = bodies_[i];
   if (b.type == BodyType::static_body || b.removed) return;
   b.awake = true;
   b.sleep_time = 0;
 }
 
 Aabb World::bounds(BodyId id) const {
-  const Body& b = bodies_[id];
+  SHATTER_CHECK(valid(id));
+  return slot_bounds(id.index);
+}
+
+Aabb World::slot_bounds(Index i) const {
+  const Body& b = bodies_[i];
   if (b.shape->is_plane) {
     Aabb all;
     all.min.setConstant(-std::numeric_limits<double>::infinity());
@@ -302,11 +368,19 @@ Aabb World::bounds(BodyId id) const {
   return transform_box(b.shape->local_bounds, transform_of(b.rigid));
 }
 
-void World::exclude_pair(BodyId a, BodyId b) { insert_pair(excluded_, a, b); }
+Result<void> World::exclude_pair(BodyId a, BodyId b) {
+  if (!valid(a) || !valid(b) || a == b) return make_error("exclude_pair: needs two different valid body ids");
+  insert_pair(excluded_, a.index, b.index);
+  return {};
+}
 
-void World::exclude_until_apart(BodyId a, BodyId b) { insert_pair(until_apart_, a, b); }
+Result<void> World::exclude_until_apart(BodyId a, BodyId b) {
+  if (!valid(a) || !valid(b) || a == b) return make_error("exclude_until_apart: needs two different valid body ids");
+  insert_pair(until_apart_, a.index, b.index);
+  return {};
+}
 
-bool World::pair_excluded(BodyId a, BodyId b) const { return contains_pair(excluded_, a, b); }
+bool World::pair_excluded(Index a, Index b) const { return contains_pair(excluded_, a, b); }
 
 double World::motion_bound(const Body& b) const {
   if (b.type == BodyType::static_body || !b.awake) return 0;
@@ -319,7 +393,7 @@ void World::find_pairs(std::vector<PairRef>& pairs) {
   boxes_.resize(n);
   for (Index i = 0; i < n; ++i) {
     const Body& b = bodies_[i];
-    boxes_[i] = b.shape->is_plane || b.removed ? Aabb{} : grow(bounds(i), half_margin + motion_bound(b));
+    boxes_[i] = b.shape->is_plane || b.removed ? Aabb{} : grow(slot_bounds(i), half_margin + motion_bound(b));
   }
   pairs.clear();
   for (const BodyPair& p : broad_phase_.find_pairs(boxes_)) pairs.push_back({p.first, p.second});
@@ -355,8 +429,8 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
       [&](std::int64_t k) {
         std::vector<Contact>& out = pair_contacts_[k];
         out.clear();
-        const BodyId ia = pairs[k].a;
-        const BodyId ib = pairs[k].b;
+        const Index ia = pairs[k].a;
+        const Index ib = pairs[k].b;
         const Body& a = bodies_[ia];
         const Body& b = bodies_[ib];
         Contact probe;
@@ -448,7 +522,7 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
   // Gather in pair order, carry the impulses of matching features (warm start), and settle the
   // pairs waiting to come apart.
   std::vector<Contact> next;
-  std::vector<std::array<BodyId, 2>> still_together;
+  std::vector<std::array<Index, 2>> still_together;
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     std::vector<Contact>& found = pair_contacts_[k];
     if (contains_pair(until_apart_, pairs[k].a, pairs[k].b)) {
@@ -499,8 +573,8 @@ void World::update_islands_and_wake() {
       return k.type == BodyType::kinematic &&
              (k.rigid.linear_velocity.squaredNorm() > 0 || k.rigid.angular_velocity.squaredNorm() > 0);
     };
-    if (moving(a)) wake(c.body_b);
-    if (moving(b)) wake(c.body_a);
+    if (moving(a)) wake_slot(c.body_b);
+    if (moving(b)) wake_slot(c.body_a);
   }
   // An island with one awake body is awake as a whole.
   std::vector<char> island_awake(n, 0);
@@ -513,7 +587,7 @@ void World::update_islands_and_wake() {
     const Index root = find_root(island_parent_, i);
     island_of_[i] = root;
     if (root == i) ++stats_.islands;
-    if (island_awake[root] && !bodies_[i].awake) wake(i);
+    if (island_awake[root] && !bodies_[i].awake) wake_slot(i);
   }
 }
 
@@ -666,8 +740,8 @@ void World::process_impacts() {
   auto old = open_impacts_.begin();
   for (std::size_t i = 0; i < contacts_.size();) {
     std::size_t j = i;
-    const BodyId a = contacts_[i].body_a;
-    const BodyId b = contacts_[i].body_b;
+    const Index a = contacts_[i].body_a;
+    const Index b = contacts_[i].body_b;
     const Body& ba = bodies_[a];
     const Body& bb = bodies_[b];
     double approach = 0;       // fastest approach of a pushing point before the solve
@@ -699,8 +773,8 @@ void World::process_impacts() {
       }
     }
     i = j;
-    while (old != open_impacts_.end() && old->pair < std::array<BodyId, 2>{a, b}) ++old;
-    const bool was_open = old != open_impacts_.end() && old->pair == std::array<BodyId, 2>{a, b};
+    while (old != open_impacts_.end() && old->pair < std::array<Index, 2>{a, b}) ++old;
+    const bool was_open = old != open_impacts_.end() && old->pair == std::array<Index, 2>{a, b};
     if (!touches) continue;  // apart: its event (if any) closes
     if (was_open) {
       OpenImpact e = *old;
@@ -736,16 +810,16 @@ void World::process_impacts() {
         work.push_back({e.pair[side], e.pair[1 - side], static_cast<Index>(k)});
   }
   std::sort(work.begin(), work.end());
-  std::vector<std::pair<BodyId, BodyId>> analyse;
+  std::vector<std::pair<Index, Index>> analyse;
   std::vector<std::vector<ImpactContact>> contacts_of;
   std::vector<double> restitution_of;
   for (std::size_t i = 0; i < work.size();) {
-    const BodyId id = work[i][0];
+    const Index id = work[i][0];
     const Body& body = bodies_[id];
     const Mat3 rotation = body.rigid.orientation.toRotationMatrix();
     std::vector<ImpactContact> found;
     double restitution = 0;
-    const BodyId first_other = work[i][1];
+    const Index first_other = work[i][1];
     for (; i < work.size() && work[i][0] == id; ++i) {
       const OpenImpact& e = open_impacts_[work[i][2]];
       const bool is_b = e.pair[1] == id;
@@ -784,10 +858,10 @@ void World::process_impacts() {
                 [&](const OpenImpact& e) { return bodies_[e.pair[0]].removed || bodies_[e.pair[1]].removed; });
 }
 
-void World::apply_impact(BodyId id, BodyId other, ImpactResult& r) {
+void World::apply_impact(Index id, Index other, ImpactResult& r) {
   ImpactRecord rec;
-  rec.body = id;
-  rec.other = other;
+  rec.body = body_id(id);
+  rec.other = body_id(other);
   rec.time = time();
   rec.point = r.load_point;
   rec.approach_speed = r.approach_speed;
@@ -807,7 +881,7 @@ void World::apply_impact(BodyId id, BodyId other, ImpactResult& r) {
     const Body& body = bodies_[id];
     const Mat3 rotation = body.rigid.orientation.toRotationMatrix();
     for (const CrackEvent& c : r.cracks)
-      events_.cracks.push_back({.body = id,
+      events_.cracks.push_back({.body = body_id(id),
                                 .origin = body.rigid.position + rotation * c.plan.origin,
                                 .normal = rotation * c.plan.normal,
                                 .radius = c.plan.radius,
@@ -837,7 +911,7 @@ void World::apply_impact(BodyId id, BodyId other, ImpactResult& r) {
   }
   // Cracked: the children replace the body (one child: cracked but whole).
   const Body parent = bodies_[id];
-  std::vector<BodyId> born;
+  std::vector<Index> born;
   for (ImpactChild& child : r.children) {
     auto shape = inherit_shape(*parent.shape, child.parent_tet, *child.model);
     if (!shape) {
@@ -854,21 +928,21 @@ void World::apply_impact(BodyId id, BodyId other, ImpactResult& r) {
                 .breakable = parent.breakable,
                 .impact = parent.impact};
     const double mass = child.model->mass.mass;
-    const BodyId cid = add(def, std::move(*shape), std::move(child.model));
+    const Index cid = add(def, std::move(*shape), std::move(child.model));
     Body& b = bodies_[cid];
     b.parent = id;
     b.plastic_strain = std::move(child.plastic_strain);
     born.push_back(cid);
-    events_.fragments.push_back({.parent = id, .body = cid, .mass = mass});
+    events_.fragments.push_back({.parent = body_id(id), .body = body_id(cid), .mass = mass});
   }
   Body& removed_body = bodies_[id];
   removed_body.removed = true;
   removed_body.awake = false;
   removed_body.solver.reset();
-  events_.removed.push_back(id);
+  events_.removed.push_back(body_id(id));
   // Siblings start in contact along their crack faces: they touch only once they have parted.
   for (std::size_t i = 0; i < born.size(); ++i)
-    for (std::size_t j = i + 1; j < born.size(); ++j) exclude_until_apart(born[i], born[j]);
+    for (std::size_t j = i + 1; j < born.size(); ++j) insert_pair(until_apart_, born[i], born[j]);
   rec.fragments = static_cast<Index>(born.size());
   events_.impacts.push_back(rec);
 }
