@@ -437,5 +437,65 @@ TEST(Impacts, IdsOfRemovedAndRestoredBodiesAreCaught) {
   EXPECT_FALSE(w.exclude_pair(again[0], children[0]).ok());
 }
 
+TEST(Impacts, HammerBreaksAVaseOnlyWhenHardEnough) {
+  for (const double speed : {1.5, 8.0}) {
+    World w;
+    w.add_plane({.normal = Vec3::UnitY(), .offset = 0});
+    auto id = w.add_body(vase(), {.rigid = drop_pose(*vase(), 0.0005, Quat::Identity(), 1.0 / 60, 0)});
+    ASSERT_OK(id);
+    for (int i = 0; i < 40; ++i) w.step();
+    EXPECT_FALSE(w.awake(*id));
+    // A 0.5 kg hammer swung at `speed` into the belly, sideways.
+    const Vec3 belly = w.rigid_state(*id).position + Vec3(-0.088, 0, 0);
+    ASSERT_OK(w.strike(*id, belly, Vec3(0.5 * speed, 0, 0), speed));
+    w.step();
+    ASSERT_EQ(w.events().impacts.size(), 1U);
+    const ImpactRecord& e = w.events().impacts[0];
+    EXPECT_EQ(e.body, *id);
+    EXPECT_EQ(e.other.index, -1);
+    std::printf("hammer at %.1f m/s: force %.3g N, stress %.3g Pa, %d fragments\n", speed, e.force,
+                e.max_principal_stress, static_cast<int>(e.fragments));
+    if (speed < 2)
+      EXPECT_FALSE(w.removed(*id));
+    else
+      EXPECT_TRUE(w.removed(*id));
+  }
+  World w;
+  auto id = w.add_body(vase(), {});
+  ASSERT_OK(id);
+  EXPECT_FALSE(w.strike(*id, Vec3::Zero(), Vec3(1, 0, 0), 0).ok());
+  EXPECT_FALSE(w.press(*id, Vec3::Zero(), Vec3(1, 0, 0), -1, 1).ok());
+  EXPECT_FALSE(w.press(BodyId{7, 0}, Vec3::Zero(), Vec3(1, 0, 0), 0, 1).ok());
+}
+
+TEST(Impacts, PressDentsClayWhileHeld) {
+  static const auto teddy = asset_model("teddy", *material_preset("modelling_clay"));
+  auto clay = std::make_shared<ImpactSettings>();
+  clay->fracture.plasticity.max_plastic_strain = 1.0;
+  double last = 0;
+  for (const double seconds : {0.05, 0.2}) {
+    World w({.gravity = Vec3::Zero()});
+    auto id = w.add_body(teddy, {.impact = clay});
+    ASSERT_OK(id);
+    // Press the front-most point backwards with 150 N on a 2 cm pad; an equal force on the back-most
+    // point keeps it in place.
+    const BodySurface surf = w.surface(*id);
+    Vec3 front = surf.positions[0], back = surf.positions[0];
+    for (const Vec3& p : surf.positions) {
+      if (p.z() > front.z()) front = p;
+      if (p.z() < back.z()) back = p;
+    }
+    ASSERT_OK(w.press(*id, front, Vec3(0, 0, -150), 0.02, seconds));
+    ASSERT_OK(w.press(*id, back, Vec3(0, 0, 150), 0.02, seconds));
+    for (int i = 0; i < 20; ++i) w.step();
+    double strain = 0;
+    for (const double e : w.plastic_strain(*id)) strain += e;
+    std::printf("press held %.2f s: plastic strain sum %.4g\n", seconds, strain);
+    EXPECT_GT(strain, last);
+    EXPECT_FALSE(w.removed(*id));
+    last = strain;
+  }
+}
+
 }  // namespace
 }  // namespace shatter

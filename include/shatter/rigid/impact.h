@@ -149,6 +149,19 @@ struct ImpactResult {
 Result<ImpactResult> analyze_impact(const BodyModel& model, BodyState& state, std::span<const ImpactContact> contacts,
                                     const ImpactSettings& settings = {});
 
+/// A force pressed on a body's surface (the paper's tools: a press, a held force field), world.
+struct SurfaceLoad {
+  Vec3 point = Vec3::Zero();  ///< where it acts, m
+  Vec3 force = Vec3::Zero();  ///< total force, N (its direction pushes into the body)
+  double radius = 0;          ///< spread over at least this radius, m (0: the patch rule alone)
+};
+
+/// The same analysis for given forces instead of an impact: steps 2-6 of the file comment with
+/// each force spread over its patch. A body pressed slowly is analysed with the force it feels
+/// (no speed threshold). Errors as analyze_impact's, and non-finite loads or negative radii.
+Result<ImpactResult> analyze_load(const BodyModel& model, BodyState& state, std::span<const SurfaceLoad> loads,
+                                  const ImpactSettings& settings = {});
+
 /// Hertz's effective modulus 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2, Pa (E2 = +inf: rigid).
 double hertz_effective_modulus(const Material& a, const Material& b);
 

@@ -249,6 +249,19 @@ class World {
   Result<void> apply_impulse(BodyId id, const Vec3& impulse, const Vec3& point);
   /// Wake a body (its island follows at the next step). Errors: an invalid or removed id.
   Result<void> wake(BodyId id);
+  // Tools (the paper's interactive tools, through the same analysis as impacts).
+  /// A hammer blow: the impulse J (N s, world) at world point `point` changes the body's motion
+  /// now, and at the end of the next step the body is analysed as an impact of |J| along J at
+  /// `speed` (m/s, the hammer's): it may dent or break like a body that hit something. Errors: an
+  /// invalid or removed id, non-finite values, a speed <= 0.
+  Result<void> strike(BodyId id, const Vec3& point, const Vec3& impulse, double speed);
+  /// A press: `force` (N, world, pushing into the body) at world point `point`, spread over at
+  /// least `radius` (m), held for `duration` seconds (at least one step). Each step it pushes the
+  /// body by force x step and, when the body is breakable, analyses it under that force: clay dents
+  /// further while it is held, glass cracks once the force is enough. It ends early when the body
+  /// breaks. Errors as strike's, and a negative radius or duration.
+  Result<void> press(BodyId id, const Vec3& point, const Vec3& force, double radius, double duration);
+
   /// Whether the body was replaced by its fragments (it then takes no further part).
   [[nodiscard]] bool removed(BodyId id) const { return body(id).removed; }
   /// The body a fragment broke from (index -1 for bodies the user added).
@@ -384,6 +397,19 @@ class World {
     std::vector<Point> points;
   };
   std::vector<OpenImpact> open_impacts_;  ///< sorted by pair
+  /// A strike waiting for its analysis, or a press being held.
+  struct Tool {
+    Index body = -1;
+    bool strike = false;
+    Vec3 local_point = Vec3::Zero();  ///< in the body frame, m
+    Vec3 vector = Vec3::Zero();       ///< strike: impulse, N s; press: force, N (world)
+    double speed = 0;                 ///< strike: m/s
+    double radius = 0;                ///< press: m
+    double remaining = 0;             ///< press: s left
+  };
+  std::vector<Tool> tools_;  ///< in the order given
+  void push_tools();
+  void process_tools();
   std::int64_t step_count_ = 0;
   std::uint64_t world_id_ = 0;  ///< tells this world's snapshots from others'
   std::vector<std::uint32_t> generations_;  ///< generations issued per slot (not part of the state)

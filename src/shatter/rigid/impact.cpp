@@ -176,110 +176,20 @@ std::vector<std::uint8_t> child_crack_faces(const BodyModel& parent, const std::
   return flags;
 }
 
-}  // namespace
-
-const char* to_string(ImpactHold hold) {
-  switch (hold) {
-    case ImpactHold::anchor_far:
-      return "anchor-far";
-    case ImpactHold::inertia_relief:
-      return "inertia-relief";
-  }
-  return "?";
-}
-
-StaticSolverOptions default_impact_solver_options() {
-  StaticSolverOptions o;
-  o.warm_start = false;
-  // An impact's time is bounded: a large deformation that Newton cannot follow within these ends
-  // at the load fraction reached (the report says so) instead of taking seconds.
-  o.max_newton_iterations = 12;
-  o.max_load_halvings = 3;
-  return o;
-}
-
-FractureOptions default_impact_fracture_options() {
-  FractureOptions o;
-  o.crack.branch = true;
-  o.crack.return_to_yield = true;
-  return o;
-}
-
-double hertz_effective_modulus(const Material& a, const Material& b) {
-  const double ca = (1 - a.poisson_ratio * a.poisson_ratio) / a.youngs_modulus;
-  const double cb = std::isinf(b.youngs_modulus) ? 0.0 : (1 - b.poisson_ratio * b.poisson_ratio) / b.youngs_modulus;
-  return 1.0 / (ca + cb);
-}
-
-HertzImpact hertz_impact(double effective_mass, double speed, double radius, double effective_modulus) {
-  HertzImpact h;
-  if (!(effective_mass > 0) || !(speed > 0) || !(radius > 0) || !(effective_modulus > 0)) return h;
-  const double sqrt_r = std::sqrt(radius);
-  h.max_approach = std::pow(15.0 * effective_mass * speed * speed / (16.0 * effective_modulus * sqrt_r), 0.4);
-  h.contact_time = 2.94 * h.max_approach / speed;
-  h.contact_radius = std::sqrt(radius * h.max_approach);
-  h.peak_force = 4.0 / 3.0 * effective_modulus * sqrt_r * std::pow(h.max_approach, 1.5);
-  return h;
-}
-
-Result<ImpactResult> analyze_impact(const BodyModel& model, BodyState& state, std::span<const ImpactContact> contacts,
-                                    const ImpactSettings& settings) {
-  const std::size_t nn = model.mesh.positions.size();
-  const Index nt = model.mesh.num_tets();
-  if (nt == 0) return make_error("analyze_impact: the body model has no tets");
-  if (!state.plastic_strain.empty() && state.plastic_strain.size() != static_cast<std::size_t>(nt))
-    return make_error("analyze_impact: the state has " + std::to_string(state.plastic_strain.size()) +
-                      " plastic strains for " + std::to_string(nt) + " tets");
-  for (std::size_t k = 0; k < contacts.size(); ++k) {
-    const ImpactContact& c = contacts[k];
-    if (!c.point.allFinite() || !c.normal.allFinite() || !std::isfinite(c.normal_impulse) ||
-        !std::isfinite(c.approach_speed) || c.normal_impulse < 0 || !(c.normal.norm() > 0))
-      return make_error("analyze_impact: contact " + std::to_string(k) +
-                        " is not finite, has a zero normal or a negative impulse");
-  }
-
-  ImpactResult result;
-  result.plastic_strain = state.plastic_strain;
-  if (result.plastic_strain.empty()) result.plastic_strain.assign(static_cast<std::size_t>(nt), 0.0);
-
-  // Loads in the body frame; the impact's speed is that of its fastest loaded contact.
-  const RigidState& rigid = state.rigid;
-  const Mat3 to_body = rigid.orientation.toRotationMatrix().transpose();
-  std::vector<LocalLoad> loads;
-  Vec3 weighted_point = Vec3::Zero();
-  for (const ImpactContact& c : contacts) {
-    if (!(c.normal_impulse > 0)) continue;
-    loads.push_back({to_body * (c.point - rigid.position), to_body * c.normal.normalized(), c.normal_impulse});
-    result.impulse += c.normal_impulse;
-    result.approach_speed = std::max(result.approach_speed, c.approach_speed);
-    weighted_point += c.normal_impulse * c.point;
-  }
-  if (loads.empty() || result.approach_speed < settings.min_approach_speed) return result;
-  result.analysed = true;
-  result.load_point = weighted_point / result.impulse;
-
-  // The load: Hertz's contact time for the effective mass the impulse implies, and the impulse
-  // delivered as a half-sine pulse of that duration, whose peak is (pi/2) J / T_c.
-  double body_radius = 0;
-  for (const Vec3& p : model.mesh.positions) body_radius = std::max(body_radius, p.norm());
-  const Material& material = model.fem.material;
-  const double e_star = hertz_effective_modulus(material, settings.other_material.value_or(material));
-  result.effective_mass = result.impulse / ((1 + settings.restitution) * result.approach_speed);
-  const HertzImpact hertz =
-      hertz_impact(result.effective_mass, result.approach_speed, settings.curvature_radius * body_radius, e_star);
-  result.contact_time = std::clamp(hertz.contact_time, settings.min_contact_time, settings.max_contact_time);
-  result.force = 0.5 * std::numbers::pi * result.impulse / result.contact_time;
-
-  // Each contact's share of the load, in proportion to its impulse, as a uniform pressure over its
-  // patch: the surface vertices within the patch radius that do not face away from the push
-  // (area weights). The nearest vertex alone takes it when no vertex qualifies.
+// Each load's force as a uniform pressure over its patch: the surface vertices within the patch
+// radius that do not face away from the push (area weights); the nearest vertex alone takes it
+// when no vertex qualifies. `force[k]` is load k's force, N; `radius_floor` is the smallest patch
+// radius, m. Adds into `forces` (#nodes), marks `loaded`; returns the largest patch radius.
+double spread_loads(const BodyModel& model, const std::vector<LocalLoad>& loads, const std::vector<double>& force,
+                    double radius_floor, const ImpactSettings& settings, std::vector<Vec3>& forces,
+                    std::vector<char>& loaded) {
   const TriSurface& surface = model.surface;
   const SurfaceAreas areas = surface_areas(surface);
   const std::size_t nv = surface.positions.size();
-  std::vector<Vec3> forces(nn, Vec3::Zero());
-  std::vector<char> loaded(nn, 0);
+  double largest = 0;
   std::vector<std::pair<Index, double>> patch;
-  for (const LocalLoad& l : loads) {
+  for (std::size_t k = 0; k < loads.size(); ++k) {
+    const LocalLoad& l = loads[k];
     Index nearest = 0;
     double nearest_d = std::numeric_limits<double>::infinity();
     for (std::size_t v = 0; v < nv; ++v) {
@@ -289,9 +199,8 @@ Result<ImpactResult> analyze_impact(const BodyModel& model, BodyState& state, st
         nearest = static_cast<Index>(v);
       }
     }
-    const double radius = std::max({hertz.contact_radius, settings.patch_edges * areas.edge[nearest],
-                                    settings.min_patch_radius * body_radius});
-    result.patch_radius = std::max(result.patch_radius, radius);
+    const double radius = std::max(radius_floor, settings.patch_edges * areas.edge[nearest]);
+    largest = std::max(largest, radius);
     patch.clear();
     double total = 0;
     for (std::size_t v = 0; v < nv; ++v) {
@@ -305,15 +214,41 @@ Result<ImpactResult> analyze_impact(const BodyModel& model, BodyState& state, st
       patch.assign(1, {nearest, 1.0});
       total = 1.0;
     }
-    const Vec3 f = (result.force * l.impulse / result.impulse) * l.direction;
     for (const auto& [v, w] : patch) {
       const Index node = surface.vertex_node[v];
-      forces[node] += (w / total) * f;
+      forces[node] += (force[k] * w / total) * l.direction;
       loaded[node] = 1;
     }
   }
-  result.loaded_nodes = static_cast<Index>(std::count(loaded.begin(), loaded.end(), 1));
+  return largest;
+}
 
+double body_radius_of(const BodyModel& model) {
+  double r = 0;
+  for (const Vec3& p : model.mesh.positions) r = std::max(r, p.norm());
+  return r;
+}
+
+Result<void> check_state(const BodyModel& model, const BodyState& state, const char* what) {
+  const Index nt = model.mesh.num_tets();
+  if (nt == 0) return make_error(std::string(what) + ": the body model has no tets");
+  if (!state.plastic_strain.empty() && state.plastic_strain.size() != static_cast<std::size_t>(nt))
+    return make_error(std::string(what) + ": the state has " + std::to_string(state.plastic_strain.size()) +
+                      " plastic strains for " + std::to_string(nt) + " tets");
+  return {};
+}
+
+// Steps 3-6 of the analysis (impact.h): hold, solve, stresses, plasticity, cracks, children, for
+// the nodal `forces` (N, body frame) of `loads`.
+Result<void> respond(const BodyModel& model, BodyState& state, const std::vector<LocalLoad>& loads,
+                     std::vector<Vec3> forces, double body_radius, const ImpactSettings& settings,
+                     ImpactResult& result) {
+  const std::size_t nn = model.mesh.positions.size();
+  const Index nt = model.mesh.num_tets();
+  const RigidState& rigid = state.rigid;
+  const Material& material = model.fem.material;
+  double total_weight = 0;
+  for (const LocalLoad& l : loads) total_weight += l.impulse;
   // Hold the body and solve its static response.
   StaticProblem problem;
   result.collision_radius = settings.collision_radius * body_radius;
@@ -321,7 +256,7 @@ Result<ImpactResult> analyze_impact(const BodyModel& model, BodyState& state, st
     problem.anchors = hold_far(model.mesh, loads, result.collision_radius);
   } else {
     Vec3 local_load_point = Vec3::Zero();
-    for (const LocalLoad& l : loads) local_load_point += (l.impulse / result.impulse) * l.point;
+    for (const LocalLoad& l : loads) local_load_point += (l.impulse / total_weight) * l.point;
     problem.anchors = hold_inertia_relief(model.mesh, model.fem, local_load_point, forces);
   }
   for (std::size_t i = 0; i < nn; ++i)
@@ -352,7 +287,7 @@ Result<ImpactResult> analyze_impact(const BodyModel& model, BodyState& state, st
   const bool may_yield = fo.plasticity.enabled && result.max_von_mises > material.yield_stress;
   if (!may_crack && !may_yield) {
     result.fracture_ms = ms_since(t0);
-    return result;
+    return {};
   }
   FractureOptions options = fo;
   options.plastic_strain = result.plastic_strain;
@@ -376,7 +311,7 @@ Result<ImpactResult> analyze_impact(const BodyModel& model, BodyState& state, st
       result.children.push_back(std::move(child));
     }
     result.fracture_ms = ms_since(t0);
-    return result;
+    return {};
   }
 
   // Children. The density follows the rest volume so that the parent's mass is kept exactly
@@ -436,6 +371,150 @@ Result<ImpactResult> analyze_impact(const BodyModel& model, BodyState& state, st
     result.children.push_back(std::move(child));
   }
   result.fracture_ms = ms_since(t0);
+  return {};
+}
+
+
+}  // namespace
+
+const char* to_string(ImpactHold hold) {
+  switch (hold) {
+    case ImpactHold::anchor_far:
+      return "anchor-far";
+    case ImpactHold::inertia_relief:
+      return "inertia-relief";
+  }
+  return "?";
+}
+
+StaticSolverOptions default_impact_solver_options() {
+  StaticSolverOptions o;
+  o.warm_start = false;
+  // An impact's time is bounded: a large deformation that Newton cannot follow within these ends
+  // at the load fraction reached (the report says so) instead of taking seconds.
+  o.max_newton_iterations = 12;
+  o.max_load_halvings = 3;
+  return o;
+}
+
+FractureOptions default_impact_fracture_options() {
+  FractureOptions o;
+  o.crack.branch = true;
+  o.crack.return_to_yield = true;
+  return o;
+}
+
+double hertz_effective_modulus(const Material& a, const Material& b) {
+  const double ca = (1 - a.poisson_ratio * a.poisson_ratio) / a.youngs_modulus;
+  const double cb = std::isinf(b.youngs_modulus) ? 0.0 : (1 - b.poisson_ratio * b.poisson_ratio) / b.youngs_modulus;
+  return 1.0 / (ca + cb);
+}
+
+HertzImpact hertz_impact(double effective_mass, double speed, double radius, double effective_modulus) {
+  HertzImpact h;
+  if (!(effective_mass > 0) || !(speed > 0) || !(radius > 0) || !(effective_modulus > 0)) return h;
+  const double sqrt_r = std::sqrt(radius);
+  h.max_approach = std::pow(15.0 * effective_mass * speed * speed / (16.0 * effective_modulus * sqrt_r), 0.4);
+  h.contact_time = 2.94 * h.max_approach / speed;
+  h.contact_radius = std::sqrt(radius * h.max_approach);
+  h.peak_force = 4.0 / 3.0 * effective_modulus * sqrt_r * std::pow(h.max_approach, 1.5);
+  return h;
+}
+
+Result<ImpactResult> analyze_impact(const BodyModel& model, BodyState& state, std::span<const ImpactContact> contacts,
+                                    const ImpactSettings& settings) {
+  SHATTER_TRY(checked, check_state(model, state, "analyze_impact"));
+  const std::size_t nn = model.mesh.positions.size();
+  const Index nt = model.mesh.num_tets();
+  for (std::size_t k = 0; k < contacts.size(); ++k) {
+    const ImpactContact& c = contacts[k];
+    if (!c.point.allFinite() || !c.normal.allFinite() || !std::isfinite(c.normal_impulse) ||
+        !std::isfinite(c.approach_speed) || c.normal_impulse < 0 || !(c.normal.norm() > 0))
+      return make_error("analyze_impact: contact " + std::to_string(k) +
+                        " is not finite, has a zero normal or a negative impulse");
+  }
+
+  ImpactResult result;
+  result.plastic_strain = state.plastic_strain;
+  if (result.plastic_strain.empty()) result.plastic_strain.assign(static_cast<std::size_t>(nt), 0.0);
+
+  // Loads in the body frame; the impact's speed is that of its fastest loaded contact.
+  const RigidState& rigid = state.rigid;
+  const Mat3 to_body = rigid.orientation.toRotationMatrix().transpose();
+  std::vector<LocalLoad> loads;
+  Vec3 weighted_point = Vec3::Zero();
+  for (const ImpactContact& c : contacts) {
+    if (!(c.normal_impulse > 0)) continue;
+    loads.push_back({to_body * (c.point - rigid.position), to_body * c.normal.normalized(), c.normal_impulse});
+    result.impulse += c.normal_impulse;
+    result.approach_speed = std::max(result.approach_speed, c.approach_speed);
+    weighted_point += c.normal_impulse * c.point;
+  }
+  if (loads.empty() || result.approach_speed < settings.min_approach_speed) return result;
+  result.analysed = true;
+  result.load_point = weighted_point / result.impulse;
+
+  // The load: Hertz's contact time for the effective mass the impulse implies, and the impulse
+  // delivered as a half-sine pulse of that duration, whose peak is (pi/2) J / T_c.
+  const double body_radius = body_radius_of(model);
+  const Material& material = model.fem.material;
+  const double e_star = hertz_effective_modulus(material, settings.other_material.value_or(material));
+  result.effective_mass = result.impulse / ((1 + settings.restitution) * result.approach_speed);
+  const HertzImpact hertz =
+      hertz_impact(result.effective_mass, result.approach_speed, settings.curvature_radius * body_radius, e_star);
+  result.contact_time = std::clamp(hertz.contact_time, settings.min_contact_time, settings.max_contact_time);
+  result.force = 0.5 * std::numbers::pi * result.impulse / result.contact_time;
+
+  // Each contact's share of the load, in proportion to its impulse, spread over its patch.
+  std::vector<Vec3> forces(nn, Vec3::Zero());
+  std::vector<char> loaded(nn, 0);
+  std::vector<double> shares;
+  for (const LocalLoad& l : loads) shares.push_back(result.force * l.impulse / result.impulse);
+  result.patch_radius =
+      spread_loads(model, loads, shares, std::max(hertz.contact_radius, settings.min_patch_radius * body_radius),
+                   settings, forces, loaded);
+  result.loaded_nodes = static_cast<Index>(std::count(loaded.begin(), loaded.end(), 1));
+  SHATTER_TRY(done, respond(model, state, loads, std::move(forces), body_radius, settings, result));
+  return result;
+}
+
+Result<ImpactResult> analyze_load(const BodyModel& model, BodyState& state, std::span<const SurfaceLoad> loads,
+                                  const ImpactSettings& settings) {
+  SHATTER_TRY(checked, check_state(model, state, "analyze_load"));
+  const std::size_t nn = model.mesh.positions.size();
+  for (std::size_t k = 0; k < loads.size(); ++k)
+    if (!loads[k].point.allFinite() || !loads[k].force.allFinite() || !std::isfinite(loads[k].radius) ||
+        loads[k].radius < 0)
+      return make_error("analyze_load: load " + std::to_string(k) + " is not finite or has a negative radius");
+  ImpactResult result;
+  result.plastic_strain = state.plastic_strain;
+  if (result.plastic_strain.empty()) result.plastic_strain.assign(static_cast<std::size_t>(model.mesh.num_tets()), 0.0);
+  const Mat3 to_body = state.rigid.orientation.toRotationMatrix().transpose();
+  std::vector<LocalLoad> local;
+  std::vector<double> magnitude;
+  Vec3 weighted_point = Vec3::Zero();
+  for (const SurfaceLoad& l : loads) {
+    const double f = l.force.norm();
+    if (!(f > 0)) continue;
+    local.push_back({to_body * (l.point - state.rigid.position), to_body * (l.force / f), f});
+    magnitude.push_back(f);
+    result.force += f;
+    weighted_point += f * l.point;
+  }
+  if (local.empty()) return result;
+  result.analysed = true;
+  result.load_point = weighted_point / result.force;
+  const double body_radius = body_radius_of(model);
+  std::vector<Vec3> forces(nn, Vec3::Zero());
+  std::vector<char> loaded(nn, 0);
+  // One spread per load, each with its own radius floor.
+  for (std::size_t k = 0; k < local.size(); ++k) {
+    const double floor = std::max(loads[k].radius, settings.min_patch_radius * body_radius);
+    result.patch_radius = std::max(
+        result.patch_radius, spread_loads(model, {local[k]}, {magnitude[k]}, floor, settings, forces, loaded));
+  }
+  result.loaded_nodes = static_cast<Index>(std::count(loaded.begin(), loaded.end(), 1));
+  SHATTER_TRY(done, respond(model, state, local, std::move(forces), body_radius, settings, result));
   return result;
 }
 

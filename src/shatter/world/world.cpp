@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "shatter/core/hash.h"
+#include "shatter/core/log.h"
 #include "shatter/core/parallel.h"
 
 namespace shatter {
@@ -85,6 +86,7 @@ struct World::State {
   std::vector<std::array<Index, 2>> excluded;
   std::vector<std::array<Index, 2>> until_apart;
   std::vector<World::OpenImpact> open_impacts;
+  std::vector<World::Tool> tools;
   std::int64_t step_count = 0;
 };
 
@@ -847,6 +849,7 @@ void World::process_impacts() {
     state.plastic_strain = body.plastic_strain;
     state.solver = body.solver;
     auto result = analyze_impact(*body.model, state, contacts_of[k], settings);
+    if (!result) log_warning("world: the impact analysis of body " + std::to_string(id) + " failed: " + result.error().message);
     if (!result || !result->analysed) continue;
     ++stats_.impacts;
     apply_impact(id, other_id, *result);
@@ -861,7 +864,7 @@ void World::process_impacts() {
 void World::apply_impact(Index id, Index other, ImpactResult& r) {
   ImpactRecord rec;
   rec.body = body_id(id);
-  rec.other = body_id(other);
+  rec.other = other < 0 ? BodyId{} : body_id(other);
   rec.time = time();
   rec.point = r.load_point;
   rec.approach_speed = r.approach_speed;
@@ -947,9 +950,98 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
   events_.impacts.push_back(rec);
 }
 
+Result<void> World::strike(BodyId id, const Vec3& point, const Vec3& impulse, double speed) {
+  SHATTER_TRY(slot, live_slot(id, "strike"));
+  if (!point.allFinite() || !impulse.allFinite() || !std::isfinite(speed) || !(speed > 0))
+    return make_error("strike: the point and impulse must be finite and the speed > 0");
+  SHATTER_TRY(pushed, apply_impulse(id, impulse, point));
+  const Body& b = bodies_[*slot];
+  tools_.push_back({.body = *slot,
+                    .strike = true,
+                    .local_point = b.rigid.orientation.conjugate() * (point - b.rigid.position),
+                    .vector = impulse,
+                    .speed = speed});
+  return {};
+}
+
+Result<void> World::press(BodyId id, const Vec3& point, const Vec3& force, double radius, double duration) {
+  SHATTER_TRY(slot, live_slot(id, "press"));
+  if (!point.allFinite() || !force.allFinite() || !std::isfinite(radius) || !std::isfinite(duration) || radius < 0 ||
+      duration < 0)
+    return make_error("press: the point and force must be finite, the radius and duration >= 0");
+  const Body& b = bodies_[*slot];
+  tools_.push_back({.body = *slot,
+                    .strike = false,
+                    .local_point = b.rigid.orientation.conjugate() * (point - b.rigid.position),
+                    .vector = force,
+                    .radius = radius,
+                    .remaining = std::max(duration, settings_.time_step)});
+  return {};
+}
+
+void World::push_tools() {
+  // Presses push their bodies for the coming step (strikes pushed when given).
+  for (const Tool& t : tools_) {
+    Body& b = bodies_[t.body];
+    if (t.strike || b.removed || b.type != BodyType::dynamic) continue;
+    const Vec3 point = b.rigid.position + b.rigid.orientation * t.local_point;
+    const Vec3 impulse = settings_.time_step * t.vector;
+    b.rigid.linear_velocity += b.inertia.inverse_mass * impulse;
+    b.rigid.angular_velocity +=
+        world_inverse_inertia(b.inertia, b.rigid.orientation) * (point - b.rigid.position).cross(impulse);
+    wake_slot(t.body);
+  }
+}
+
+void World::process_tools() {
+  if (tools_.empty()) return;
+  std::vector<Tool> tools = std::move(tools_);
+  tools_.clear();
+  for (Tool& t : tools) {
+    Body& b = bodies_[t.body];
+    if (b.removed) continue;
+    const bool analysable = b.type == BodyType::dynamic && b.model && b.breakable;
+    if (analysable) {
+      const Vec3 point = b.rigid.position + b.rigid.orientation * t.local_point;
+      ImpactSettings settings = b.impact ? *b.impact : settings_.impact;
+      settings.other_material = settings_.obstacle_material;
+      if (body_count() >= settings_.max_bodies) settings.fracture.crack.max_cracks = 0;
+      BodyState state;
+      state.rigid = b.rigid;
+      state.plastic_strain = b.plastic_strain;
+      state.solver = b.solver;
+      Result<ImpactResult> result = ImpactResult{};
+      if (t.strike) {
+        settings.min_approach_speed = 0;
+        const ImpactContact contact{.point = point,
+                                    .normal = t.vector.normalized(),
+                                    .normal_impulse = t.vector.norm(),
+                                    .approach_speed = t.speed};
+        result = analyze_impact(*b.model, state, std::span(&contact, 1), settings);
+      } else {
+        const SurfaceLoad load{.point = point, .force = t.vector, .radius = t.radius};
+        result = analyze_load(*b.model, state, std::span(&load, 1), settings);
+      }
+      if (!result) {
+        log_warning("world: the analysis of a tool on body " + std::to_string(t.body) +
+                    " failed: " + result.error().message);
+      } else if (result->analysed) {
+        ++stats_.impacts;
+        apply_impact(t.body, -1, *result);
+      }
+    }
+    t.remaining -= settings_.time_step;
+    if (!t.strike && t.remaining > 0.5 * settings_.time_step && !bodies_[t.body].removed) tools_.push_back(t);
+  }
+  std::erase_if(contacts_, [&](const Contact& c) { return bodies_[c.body_a].removed || bodies_[c.body_b].removed; });
+  std::erase_if(open_impacts_,
+                [&](const OpenImpact& e) { return bodies_[e.pair[0]].removed || bodies_[e.pair[1]].removed; });
+}
+
 void World::step() {
   stats_ = {};
   events_ = {};
+  push_tools();
   // Nothing to do while every dynamic body sleeps and no kinematic body moves.
   const bool anything_moves = std::any_of(bodies_.begin(), bodies_.end(), [](const Body& b) {
     if (b.type == BodyType::dynamic) return b.awake;
@@ -972,10 +1064,12 @@ void World::step() {
     t0 = Clock::now();
     ++step_count_;
     process_impacts();
+    process_tools();
     stats_.impact_ms = ms_since(t0);
     return;
   }
   ++step_count_;
+  process_tools();
 }
 
 Index World::live_body_count() const {
@@ -997,6 +1091,7 @@ WorldSnapshot World::save() const {
   state->excluded = excluded_;
   state->until_apart = until_apart_;
   state->open_impacts = open_impacts_;
+  state->tools = tools_;
   state->step_count = step_count_;
   WorldSnapshot s;
   s.state_ = std::move(state);
@@ -1012,6 +1107,7 @@ Result<void> World::restore(const WorldSnapshot& snapshot) {
   excluded_ = s.excluded;
   until_apart_ = s.until_apart;
   open_impacts_ = s.open_impacts;
+  tools_ = s.tools;
   step_count_ = s.step_count;
   events_ = {};
   return {};
@@ -1050,6 +1146,13 @@ std::uint64_t World::state_hash() const {
   for (const auto& p : excluded_) h.add(p);
   h.add(std::int64_t{-1});
   for (const auto& p : until_apart_) h.add(p);
+  h.add(std::int64_t{-1});
+  for (const Tool& t : tools_) {
+    h.add(t.body);
+    h.add(static_cast<std::uint8_t>(t.strike));
+    h.add(std::array<double, 9>{t.local_point.x(), t.local_point.y(), t.local_point.z(), t.vector.x(), t.vector.y(),
+                                t.vector.z(), t.speed, t.radius, t.remaining});
+  }
   h.add(std::int64_t{-1});
   for (const OpenImpact& e : open_impacts_) {
     h.add(e.pair);
