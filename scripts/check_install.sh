@@ -18,3 +18,7 @@ cmake -S examples/embed -B "$build" -G Ninja -DCMAKE_PREFIX_PATH="$prefix" -DCMA
 cmake --build "$build" >/dev/null
 "$build/embed" "$build/out"
 test -f "$build/out/fragments.vtu"
+# The world through the public headers: a dropped vase breaks.
+cmake -S examples/drop -B "$build/drop" -G Ninja -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$build/drop" >/dev/null
+"$build/drop/drop" "$root/assets/meshes/vase.msh" >/dev/null

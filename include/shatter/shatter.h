@@ -52,6 +52,7 @@
 // solver.
 #include "shatter/rigid/body.h"
 #include "shatter/rigid/contact_solver.h"
+#include "shatter/rigid/impact.h"
 #include "shatter/rigid/integrate.h"
 
 // Collision detection: the broad phase, convex hulls and pieces, contact manifolds, the tet mode.

@@ -373,8 +373,10 @@ TEST(Impacts, Soak) {
     }
     double debris = 0;
     for (int step = 0; step < 120; ++step) {
+      const double before = live_mass(w, debris);
       w.step();
       for (const ImpactRecord& e : w.events().impacts) debris += e.debris_mass;
+      EXPECT_NEAR(live_mass(w, debris), before, 1e-11 * mass0) << "round " << round << " step " << step;
     }
     EXPECT_NEAR(live_mass(w, debris), mass0, 1e-11 * mass0) << "round " << round;
     for (Index slot = 1; slot < w.body_count(); ++slot) {

@@ -118,7 +118,9 @@ struct WorldSettings {
                              .tensile_strength = kInfinity,
                              .yield_stress = kInfinity,
                              .fracture_toughness = kInfinity};
-  /// Debris budget of the world: once it holds this many bodies (removed ones included, as ids
+  /// Debris: in a world, ImpactSettings::min_fragment_fraction is taken of the mass of the body
+  /// the user added (not of the piece that breaks again), so repeated chipping stops at a size.
+  /// Budget of the world: once it holds this many bodies (removed ones included, as ids
   /// are never reused), impacts still dent bodies but no longer crack them.
   Index max_bodies = 4096;
 };
@@ -334,6 +336,7 @@ class World {
     bool removed = false;
     bool breakable = true;
     Index parent = -1;
+    double root_mass = 0;  ///< mass of the body the user added that this one broke from, kg
     std::uint32_t generation = 0;
     std::shared_ptr<const ImpactSettings> impact;
     std::vector<double> plastic_strain;     ///< per tet of model

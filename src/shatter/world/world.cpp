@@ -110,6 +110,7 @@ Index World::add(const BodyDef& def, std::shared_ptr<const Shape> shape, std::sh
   body.breakable = def.breakable;
   body.impact = def.impact;
   if (body.model) {
+    body.root_mass = body.model->mass.mass;
     body.plastic_strain.assign(body.model->mesh.tets.size(), 0.0);
     body.solver = std::make_shared<StaticSolver>();
   }
@@ -844,6 +845,7 @@ void World::process_impacts() {
     settings.other_material = other.model ? other.model->fem.material : settings_.obstacle_material;
     settings.restitution = restitution_of[k];
     if (body_count() >= settings_.max_bodies) settings.fracture.crack.max_cracks = 0;
+    settings.min_fragment_mass = std::max(settings.min_fragment_mass, settings.min_fragment_fraction * body.root_mass);
     BodyState state;
     state.rigid = body.rigid;
     state.plastic_strain = body.plastic_strain;
@@ -890,7 +892,7 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
                                 .radius = c.plan.radius,
                                 .stress = c.plan.stress});
   }
-  if (r.children.empty()) {
+  if (r.children.empty() && r.cracks.empty()) {
     bodies_[id].plastic_strain = std::move(r.plastic_strain);
     events_.impacts.push_back(rec);
     return;
@@ -908,16 +910,24 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
       body.inertia = rigid_inertia(child.model->mass);
       body.rigid = child.rigid;
       body.plastic_strain = std::move(child.plastic_strain);
+    } else {  // keep the body as it was: nothing was removed
+      log_warning("world: body " + std::to_string(id) + " keeps its shape: " + shape.error().message);
+      rec.dented = false;
+      rec.cracks = 0;
+      rec.debris_count = 0;
+      rec.debris_mass = 0;
     }
     events_.impacts.push_back(rec);
     return;
   }
-  // Cracked: the children replace the body (one child: cracked but whole).
+  // Broken: the children replace the body. (None: every piece was below the debris size, and
+  // the whole body went as debris.)
   const Body parent = bodies_[id];
   std::vector<Index> born;
   for (ImpactChild& child : r.children) {
     auto shape = inherit_shape(*parent.shape, child.parent_tet, *child.model);
-    if (!shape) {
+    if (!shape) {  // a piece without a collision shape cannot take part: it goes as debris
+      log_warning("world: a fragment of body " + std::to_string(id) + " became debris: " + shape.error().message);
       rec.debris_count += 1;
       rec.debris_mass += child.model->mass.mass;
       continue;
@@ -934,6 +944,7 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
     const Index cid = add(def, std::move(*shape), std::move(child.model));
     Body& b = bodies_[cid];
     b.parent = id;
+    b.root_mass = parent.root_mass;
     b.plastic_strain = std::move(child.plastic_strain);
     born.push_back(cid);
     events_.fragments.push_back({.parent = body_id(id), .body = body_id(cid), .mass = mass});
@@ -1006,6 +1017,7 @@ void World::process_tools() {
       ImpactSettings settings = b.impact ? *b.impact : settings_.impact;
       settings.other_material = settings_.obstacle_material;
       if (body_count() >= settings_.max_bodies) settings.fracture.crack.max_cracks = 0;
+      settings.min_fragment_mass = std::max(settings.min_fragment_mass, settings.min_fragment_fraction * b.root_mass);
       BodyState state;
       state.rigid = b.rigid;
       state.plastic_strain = b.plastic_strain;
