@@ -60,9 +60,10 @@ void BM_Drop(benchmark::State& state) {
   static std::shared_ptr<const BodyModel> models[3][2];
   const int slot = refine > 1 ? 1 : 0;
   auto& model = models[scene][slot];
-  if (!model) model = scene == 0 ? model_of("vase", "porcelain", refine)
-                      : scene == 1 ? model_of("teddy", "modelling_clay", refine)
-                                   : model_of("cinder_block", "concrete", refine);
+  if (!model)
+    model = scene == 0   ? model_of("vase", "porcelain", refine)
+            : scene == 1 ? model_of("teddy", "modelling_clay", refine)
+                         : model_of("cinder_block", "concrete", refine);
   auto clay = std::make_shared<ImpactSettings>();
   clay->fracture.plasticity.max_plastic_strain = 1.0;
   std::vector<double> step_ms;
@@ -72,7 +73,8 @@ void BM_Drop(benchmark::State& state) {
     World w;
     w.add_plane({.normal = Vec3::UnitY(), .offset = 0});
     if (scene == 0) {
-      (void)w.add_body(model, {.rigid = above_ground(*model, 1.0, Quat(Eigen::AngleAxisd(0.6, Vec3(1, 0, 1).normalized())))});
+      (void)w.add_body(model,
+                       {.rigid = above_ground(*model, 1.0, Quat(Eigen::AngleAxisd(0.6, Vec3(1, 0, 1).normalized())))});
     } else if (scene == 1) {
       (void)w.add_body(model, {.rigid = above_ground(*model, 0.5, Quat::Identity()), .impact = clay});
     } else {
@@ -121,11 +123,12 @@ BENCHMARK(BM_Drop)
 void BM_Impact40k(benchmark::State& state) {
   static const BodyModel bar = [] {
     const TetMesh m = make_box_mesh(
-        {.min = Vec3(-0.5, -0.05, -0.05), .max = Vec3(0.5, 0.05, 0.05), .cells = {100, 10, 10}, .jitter = 0.0});
+        {.min = Vec3(-0.5, -0.05, -0.05), .max = Vec3(0.5, 0.05, 0.05), .cells = {80, 9, 9}, .jitter = 0.0});
     return std::move(*make_body_model(m, *material_preset("glass")));
   }();
   BodyState body = make_body_state(bar);
-  const ImpactContact blow{.point = Vec3(0, -0.05, 0), .normal = Vec3::UnitY(), .normal_impulse = 60, .approach_speed = 10};
+  const ImpactContact blow{
+      .point = Vec3(0, -0.05, 0), .normal = Vec3::UnitY(), .normal_impulse = 60, .approach_speed = 10};
   double solve = 0, fracture = 0;
   std::size_t children = 0;
   for (auto _ : state) {

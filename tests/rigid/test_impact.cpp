@@ -184,7 +184,8 @@ TEST(ImpactAnalysis, FragmentsKeepMassMomentumAndFollowEq22) {
       Vec3 centre = Vec3::Zero();
       for (const Index v : m.surface.triangles[t]) centre += m.surface.positions[v] / 3.0;
       centre += R.transpose() * (c.rigid.position - p.position);
-      const bool on_box = std::abs(std::abs(centre.x()) - 0.2) < 1e-9 || std::abs(std::abs(centre.y()) - 0.025) < 1e-9 ||
+      const bool on_box = std::abs(std::abs(centre.x()) - 0.2) < 1e-9 ||
+                          std::abs(std::abs(centre.y()) - 0.025) < 1e-9 ||
                           std::abs(std::abs(centre.z()) - 0.025) < 1e-9;
       if (m.crack_face[t]) {
         ++crack_triangles;

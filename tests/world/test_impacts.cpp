@@ -77,11 +77,12 @@ DropOutcome drop(const std::shared_ptr<const BodyModel>& model, double height, c
     w.step();
     for (const ImpactRecord& e : w.events().impacts) {
       if (verbose())
-        std::printf("  t %.3f body %d v %.2f J %.3g Tc %.3g F %.3g s1 %.3g vm %.3g conv %d cracks %d frags %d "
-                    "debris %d solve %.2f ms fracture %.2f ms\n",
-                    e.time, static_cast<int>(e.body.index), e.approach_speed, e.impulse, e.contact_time, e.force,
-                    e.max_principal_stress, e.max_von_mises, e.converged, static_cast<int>(e.cracks),
-                    static_cast<int>(e.fragments), static_cast<int>(e.debris_count), e.solve_ms, e.fracture_ms);
+        std::printf(
+            "  t %.3f body %d v %.2f J %.3g Tc %.3g F %.3g s1 %.3g vm %.3g conv %d cracks %d frags %d "
+            "debris %d solve %.2f ms fracture %.2f ms\n",
+            e.time, static_cast<int>(e.body.index), e.approach_speed, e.impulse, e.contact_time, e.force,
+            e.max_principal_stress, e.max_von_mises, e.converged, static_cast<int>(e.cracks),
+            static_cast<int>(e.fragments), static_cast<int>(e.debris_count), e.solve_ms, e.fracture_ms);
       ++out.impacts;
       out.max_stress = std::max(out.max_stress, e.max_principal_stress);
     }
@@ -141,7 +142,8 @@ TEST(Impacts, VaseDecisionIndependentOfStepAndPhase) {
 }
 
 // The lowest of `heights` from which the vase turned by orientation k breaks (inf: none).
-double lowest_breaking_height(const std::shared_ptr<const BodyModel>& model, int k, const std::vector<double>& heights) {
+double lowest_breaking_height(const std::shared_ptr<const BodyModel>& model, int k,
+                              const std::vector<double>& heights) {
   for (const double h : heights)
     if (drop(model, h, orientation_k(k), 0.8).fragments > 1) return h;
   return std::numeric_limits<double>::infinity();
@@ -258,7 +260,11 @@ TEST(Impacts, ClayTeddyDentsMoreWithEachDrop) {
     for (int step = 0; step < 45; ++step) {
       w.step();
       impacts += static_cast<int>(w.events().impacts.size());
-      for (const ImpactRecord& e : w.events().impacts) if (verbose()) std::printf("  v %.2f F %.3g s1 %.3g vm %.3g conv %d cracks %d frags %d dented %d solve %.1f ms %.1f ms\n", e.approach_speed, e.force, e.max_principal_stress, e.max_von_mises, e.converged, (int)e.cracks, (int)e.fragments, e.dented, e.solve_ms, e.fracture_ms);
+      for (const ImpactRecord& e : w.events().impacts)
+        if (verbose())
+          std::printf("  v %.2f F %.3g s1 %.3g vm %.3g conv %d cracks %d frags %d dented %d solve %.1f ms %.1f ms\n",
+                      e.approach_speed, e.force, e.max_principal_stress, e.max_von_mises, e.converged, (int)e.cracks,
+                      (int)e.fragments, e.dented, e.solve_ms, e.fracture_ms);
       EXPECT_TRUE(w.events().removed.empty());
     }
     ASSERT_FALSE(w.removed(id));
@@ -320,7 +326,10 @@ TEST(Impacts, RestingBodiesNeverCrack) {
 std::uint64_t vase_drop_hash(int threads, int restore_at) {
   const int saved = num_threads();
   set_num_threads(threads);
-  World w;
+  WorldSettings ws;
+  ws.parallel_min_pairs = 0;  // every parallel loop on, so thread counts really differ
+  ws.parallel_min_bodies = 0;
+  World w(ws);
   w.add_plane({.normal = Vec3::UnitY(), .offset = 0});
   EXPECT_TRUE(w.add_body(vase(), {.rigid = drop_pose(*vase(), 2.0, orientation_k(2), 1.0 / 60, 0)}).ok());
   WorldSnapshot snap;
@@ -363,7 +372,8 @@ TEST(Impacts, Soak) {
       const std::string& name = assets[rng.below(assets.size())];
       const std::string& mat = materials[rng.below(materials.size())];
       const auto model = asset_model(name, *material_preset(mat));
-      const Quat turn(Eigen::AngleAxisd(rng.uniform(0, 3.14), Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)).normalized()));
+      const Quat turn(Eigen::AngleAxisd(rng.uniform(0, 3.14),
+                                        Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)).normalized()));
       RigidState r = drop_pose(*model, rng.uniform(0.2, 3.0), turn, 1.0 / 60, 0);
       r.position.x() = 0.6 * b;
       r.linear_velocity = Vec3(rng.uniform(-3, 3), rng.uniform(-5, 1), rng.uniform(-3, 3));

@@ -117,17 +117,17 @@ struct ImpactResult {
   /// False when the contacts carry no impulse or are slower than min_approach_speed: nothing was
   /// solved and the body is unchanged.
   bool analysed = false;
-  double approach_speed = 0;  ///< largest approach speed of the loaded contacts, m/s
-  double impulse = 0;         ///< total normal impulse, N s
-  double effective_mass = 0;  ///< impulse / ((1 + e) v), kg
-  double contact_time = 0;    ///< Hertz contact time (clamped), s
-  double force = 0;           ///< total static load, N (the peak of the impact)
-  double patch_radius = 0;    ///< radius the load of each contact is spread over, m
-  double collision_radius = 0;  ///< r_coll, m
-  Vec3 load_point = Vec3::Zero();  ///< impulse-weighted contact point, world, m
-  Index loaded_nodes = 0;          ///< nodes carrying load
-  Index held_nodes = 0;            ///< nodes held
-  StaticReport solve;              ///< the static solve
+  double approach_speed = 0;        ///< largest approach speed of the loaded contacts, m/s
+  double impulse = 0;               ///< total normal impulse, N s
+  double effective_mass = 0;        ///< impulse / ((1 + e) v), kg
+  double contact_time = 0;          ///< Hertz contact time (clamped), s
+  double force = 0;                 ///< total static load, N (the peak of the impact)
+  double patch_radius = 0;          ///< radius the load of each contact is spread over, m
+  double collision_radius = 0;      ///< r_coll, m
+  Vec3 load_point = Vec3::Zero();   ///< impulse-weighted contact point, world, m
+  Index loaded_nodes = 0;           ///< nodes carrying load
+  Index held_nodes = 0;             ///< nodes held
+  StaticReport solve;               ///< the static solve
   double max_principal_stress = 0;  ///< largest principal stress over the tets, Pa
   double max_von_mises = 0;         ///< largest von Mises stress, Pa
   bool dented = false;              ///< plasticity changed the rest shape

@@ -127,14 +127,14 @@ struct WorldSettings {
 
 /// One impact analysis of one body (a row of StepEvents::impacts).
 struct ImpactRecord {
-  BodyId body;   ///< the body analysed
-  BodyId other;  ///< the body it hit (the lowest slot when several events opened at once)
-  double time = 0;        ///< end of the step, s
-  Vec3 point = Vec3::Zero();  ///< impulse-weighted contact point, world, m
-  double approach_speed = 0;  ///< m/s
-  double impulse = 0;         ///< N s
-  double contact_time = 0;    ///< s
-  double force = 0;           ///< static load, N
+  BodyId body;                      ///< the body analysed
+  BodyId other;                     ///< the body it hit (the lowest slot when several events opened at once)
+  double time = 0;                  ///< end of the step, s
+  Vec3 point = Vec3::Zero();        ///< impulse-weighted contact point, world, m
+  double approach_speed = 0;        ///< m/s
+  double impulse = 0;               ///< N s
+  double contact_time = 0;          ///< s
+  double force = 0;                 ///< static load, N
   double max_principal_stress = 0;  ///< Pa
   double max_von_mises = 0;         ///< Pa
   bool converged = false;           ///< the static solve converged
@@ -149,18 +149,18 @@ struct ImpactRecord {
 
 /// One crack (a row of StepEvents::cracks).
 struct CrackRecord {
-  BodyId body;                    ///< the body that cracked
-  Vec3 origin = Vec3::Zero();     ///< a point of the crack plane, world, m
-  Vec3 normal = Vec3::UnitX();    ///< the plane's normal, world
-  double radius = 0;              ///< r_frac, m
-  double stress = 0;              ///< largest principal stress at the origin, Pa
+  BodyId body;                  ///< the body that cracked
+  Vec3 origin = Vec3::Zero();   ///< a point of the crack plane, world, m
+  Vec3 normal = Vec3::UnitX();  ///< the plane's normal, world
+  double radius = 0;            ///< r_frac, m
+  double stress = 0;            ///< largest principal stress at the origin, Pa
 };
 
 /// A body born from a fracture (a row of StepEvents::fragments).
 struct FragmentRecord {
-  BodyId parent;  ///< removed body it came from
-  BodyId body;    ///< the new body
-  double mass = 0;     ///< kg
+  BodyId parent;    ///< removed body it came from
+  BodyId body;      ///< the new body
+  double mass = 0;  ///< kg
 };
 
 /// What happened in the last step, in a deterministic order (by body id).
@@ -173,8 +173,8 @@ struct StepEvents {
 
 /// A contact between two bodies (one manifold), with what the solver did in the last step.
 struct Contact {
-  Index body_a = -1;  ///< slot of body A (World::body_id gives its id); body_a < body_b
-  Index body_b = -1;  ///< slot of body B
+  Index body_a = -1;             ///< slot of body A (World::body_id gives its id); body_a < body_b
+  Index body_b = -1;             ///< slot of body B
   Index piece_a = -1;            ///< convex piece of A (-1: a plane or the tet mode)
   Index piece_b = -1;            ///< convex piece of B
   ContactConstraint constraint;  ///< normal, points, impulses (summed over the step), approach speeds
@@ -185,9 +185,9 @@ class WorldSnapshot;
 
 /// A body's boundary at its pose (World::surface).
 struct BodySurface {
-  std::vector<Vec3> positions;        ///< world, m (#vertices)
-  std::vector<Vec3> rest;             ///< rest coordinates for solid textures, m (#vertices)
-  std::vector<TriIndices> triangles;  ///< outward (#triangles)
+  std::vector<Vec3> positions;           ///< world, m (#vertices)
+  std::vector<Vec3> rest;                ///< rest coordinates for solid textures, m (#vertices)
+  std::vector<TriIndices> triangles;     ///< outward (#triangles)
   std::vector<std::uint8_t> crack_face;  ///< 1 where a crack opened the face (#triangles)
 };
 
@@ -201,7 +201,7 @@ struct StepStats {
   double broad_phase_ms = 0;  ///< wall time of each part
   double narrow_phase_ms = 0;
   double solver_ms = 0;
-  double impact_ms = 0;  ///< impact analyses and body replacement
+  double impact_ms = 0;      ///< impact analyses and body replacement
   std::int64_t impacts = 0;  ///< bodies analysed
 };
 
@@ -314,9 +314,9 @@ class World {
 
  private:
   struct Shape {
-    std::vector<ConvexHull> pieces;    ///< body frame
+    std::vector<ConvexHull> pieces;              ///< body frame
     std::vector<std::vector<Index>> piece_tets;  ///< the tets each piece covers (tet bodies)
-    std::vector<TetContactShape> tet;  ///< 0 or 1 (the paper's mode)
+    std::vector<TetContactShape> tet;            ///< 0 or 1 (the paper's mode)
     bool is_plane = false;
     Plane plane;        ///< world
     Aabb local_bounds;  ///< body frame
@@ -339,7 +339,7 @@ class World {
     double root_mass = 0;  ///< mass of the body the user added that this one broke from, kg
     std::uint32_t generation = 0;
     std::shared_ptr<const ImpactSettings> impact;
-    std::vector<double> plastic_strain;     ///< per tet of model
+    std::vector<double> plastic_strain;    ///< per tet of model
     std::shared_ptr<StaticSolver> solver;  ///< kept between impacts
   };
   struct PairRef {
@@ -357,11 +357,12 @@ class World {
   [[nodiscard]] Result<std::shared_ptr<const Shape>> make_tet_shape(const BodyModel& model) const;
   /// The shape of a model added by the user: built once per process for each model and settings
   /// and shared by every world that adds it (the decomposition of a large body takes a while).
-  [[nodiscard]] Result<std::shared_ptr<const Shape>> shared_tet_shape(const std::shared_ptr<const BodyModel>& model) const;
+  [[nodiscard]] Result<std::shared_ptr<const Shape>> shared_tet_shape(
+      const std::shared_ptr<const BodyModel>& model) const;
   /// Pieces over the given clusters of the model's tets (a dent moves nodes; a fragment keeps its
   /// parent's clusters, cut to the tets it has).
   [[nodiscard]] Result<std::shared_ptr<const Shape>> shape_from_clusters(std::vector<std::vector<Index>> clusters,
-                                                                        const BodyModel& model) const;
+                                                                         const BodyModel& model) const;
   /// A fragment's pieces from its parent's: its tets grouped by the parent piece their parent tet
   /// lay in.
   [[nodiscard]] Result<std::shared_ptr<const Shape>> inherit_shape(const Shape& parent,
@@ -380,7 +381,7 @@ class World {
 
   WorldSettings settings_;
   std::vector<Body> bodies_;
-  std::vector<Contact> contacts_;                   ///< sorted by key
+  std::vector<Contact> contacts_;                  ///< sorted by key
   std::vector<std::array<Index, 2>> excluded_;     ///< sorted slot pairs
   std::vector<std::array<Index, 2>> until_apart_;  ///< sorted slot pairs
   /// An impact event: a pair that started touching fast enough, until it stops touching. Its
@@ -414,7 +415,7 @@ class World {
   void push_tools();
   void process_tools();
   std::int64_t step_count_ = 0;
-  std::uint64_t world_id_ = 0;  ///< tells this world's snapshots from others'
+  std::uint64_t world_id_ = 0;              ///< tells this world's snapshots from others'
   std::vector<std::uint32_t> generations_;  ///< generations issued per slot (not part of the state)
   StepStats stats_;
   StepEvents events_;

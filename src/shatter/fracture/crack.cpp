@@ -90,8 +90,7 @@ std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStr
     const double r_min = options.min_radius_edges * longest_edge(mesh, e);
     const double r = ductile ? r_min : crack_radius(tension(e), strength, k, r0, r_min);
     for (const CrackPlan& p : plans) {
-      const double keep_off =
-          options.branch ? options.min_radius_edges * longest_edge(mesh, p.origin_tet) : p.radius;
+      const double keep_off = options.branch ? options.min_radius_edges * longest_edge(mesh, p.origin_tet) : p.radius;
       if ((c - p.origin).norm() <= options.separation * keep_off) return;
     }
     CrackPlan p;

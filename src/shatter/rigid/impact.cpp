@@ -323,9 +323,11 @@ Result<void> respond(const BodyModel& model, BodyState& state, const std::vector
   // Debris rules: the heaviest max_fragments children over the size limits are kept.
   std::vector<std::size_t> order(fr.fragments.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return fr.fragments[a].mass.volume > fr.fragments[b].mass.volume;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    const double va = fr.fragments[a].mass.volume, vb = fr.fragments[b].mass.volume;
+    return va != vb ? va > vb : a < b;
   });
+
   std::vector<char> keep(fr.fragments.size(), 0);
   const double min_mass = std::max(settings.min_fragment_mass, settings.min_fragment_fraction * model.mass.mass);
   int kept = 0;
@@ -374,15 +376,12 @@ Result<void> respond(const BodyModel& model, BodyState& state, const std::vector
   return {};
 }
 
-
 }  // namespace
 
 const char* to_string(ImpactHold hold) {
   switch (hold) {
-    case ImpactHold::anchor_far:
-      return "anchor-far";
-    case ImpactHold::inertia_relief:
-      return "inertia-relief";
+    case ImpactHold::anchor_far: return "anchor-far";
+    case ImpactHold::inertia_relief: return "inertia-relief";
   }
   return "?";
 }
@@ -469,6 +468,7 @@ Result<ImpactResult> analyze_impact(const BodyModel& model, BodyState& state, st
   std::vector<Vec3> forces(nn, Vec3::Zero());
   std::vector<char> loaded(nn, 0);
   std::vector<double> shares;
+  shares.reserve(loads.size());
   for (const LocalLoad& l : loads) shares.push_back(result.force * l.impulse / result.impulse);
   result.patch_radius =
       spread_loads(model, loads, shares, std::max(hertz.contact_radius, settings.min_patch_radius * body_radius),
@@ -510,8 +510,8 @@ Result<ImpactResult> analyze_load(const BodyModel& model, BodyState& state, std:
   // One spread per load, each with its own radius floor.
   for (std::size_t k = 0; k < local.size(); ++k) {
     const double floor = std::max(loads[k].radius, settings.min_patch_radius * body_radius);
-    result.patch_radius = std::max(
-        result.patch_radius, spread_loads(model, {local[k]}, {magnitude[k]}, floor, settings, forces, loaded));
+    result.patch_radius =
+        std::max(result.patch_radius, spread_loads(model, {local[k]}, {magnitude[k]}, floor, settings, forces, loaded));
   }
   result.loaded_nodes = static_cast<Index>(std::count(loaded.begin(), loaded.end(), 1));
   SHATTER_TRY(done, respond(model, state, local, std::move(forces), body_radius, settings, result));

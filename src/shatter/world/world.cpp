@@ -162,8 +162,8 @@ BodySurface World::surface(BodyId id) const {
   out.positions.reserve(s.positions.size());
   out.rest.reserve(s.positions.size());
   for (const Vec3& p : s.positions) {
-    out.positions.push_back(b.rigid.position + R * p);
-    out.rest.push_back(b.model->material_origin + p);
+    out.positions.emplace_back(b.rigid.position + R * p);
+    out.rest.emplace_back(b.model->material_origin + p);
   }
   out.triangles = s.triangles;
   out.crack_face = b.model->crack_face;
@@ -227,7 +227,7 @@ Result<std::shared_ptr<const World::Shape>> World::shared_tet_shape(
 }
 
 Result<std::shared_ptr<const World::Shape>> World::shape_from_clusters(std::vector<std::vector<Index>> clusters,
-                                                                        const BodyModel& model) const {
+                                                                       const BodyModel& model) const {
   auto shape = std::make_shared<Shape>();
   std::vector<Vec3> points;
   std::vector<char> seen(model.mesh.positions.size(), 0);
@@ -332,7 +332,8 @@ Result<void> World::set_rigid_state(BodyId id, const RigidState& rigid) {
 
 Result<void> World::apply_impulse(BodyId id, const Vec3& impulse, const Vec3& point) {
   SHATTER_TRY(slot, live_slot(id, "apply_impulse"));
-  if (!impulse.allFinite() || !point.allFinite()) return make_error("apply_impulse: the impulse or point is not finite");
+  if (!impulse.allFinite() || !point.allFinite())
+    return make_error("apply_impulse: the impulse or point is not finite");
   Body& b = bodies_[*slot];
   if (b.type != BodyType::dynamic) return {};
   b.rigid.linear_velocity += b.inertia.inverse_mass * impulse;
@@ -348,8 +349,8 @@ Result<void> World::wake(BodyId id) {
   return {};
 }
 
-void World::wake_slot(Index i) {
-  Body& b = bodies_[i];
+void World::wake_slot(Index slot) {
+  Body& b = bodies_[slot];
   if (b.type == BodyType::static_body || b.removed) return;
   b.awake = true;
   b.sleep_time = 0;
@@ -360,8 +361,8 @@ Aabb World::bounds(BodyId id) const {
   return slot_bounds(id.index);
 }
 
-Aabb World::slot_bounds(Index i) const {
-  const Body& b = bodies_[i];
+Aabb World::slot_bounds(Index slot) const {
+  const Body& b = bodies_[slot];
   if (b.shape->is_plane) {
     Aabb all;
     all.min.setConstant(-std::numeric_limits<double>::infinity());
@@ -731,9 +732,7 @@ void World::process_impacts() {
     return;
   }
   auto settings_of = [&](const Body& b) -> const ImpactSettings& { return b.impact ? *b.impact : settings_.impact; };
-  auto analysable = [](const Body& b) {
-    return b.type == BodyType::dynamic && b.model && b.breakable && !b.removed;
-  };
+  auto analysable = [](const Body& b) { return b.type == BodyType::dynamic && b.model && b.breakable && !b.removed; };
   auto velocity_at = [](const Body& b, const Vec3& p) {
     return Vec3(b.rigid.linear_velocity + b.rigid.angular_velocity.cross(p - b.rigid.position));
   };
@@ -789,8 +788,7 @@ void World::process_impacts() {
       e.pair = {a, b};
       next.push_back(std::move(e));
     } else {
-      const double threshold =
-          std::min(settings_of(ba).min_approach_speed, settings_of(bb).min_approach_speed);
+      const double threshold = std::min(settings_of(ba).min_approach_speed, settings_of(bb).min_approach_speed);
       if (approach < threshold || (!analysable(ba) && !analysable(bb))) continue;
       next.push_back({.pair = {a, b}, .steps = 0, .analysed = false, .approach = approach, .points = points});
     }
@@ -809,8 +807,7 @@ void World::process_impacts() {
   for (const std::size_t k : ready) {
     const OpenImpact& e = open_impacts_[k];
     for (int side = 0; side < 2; ++side)
-      if (analysable(bodies_[e.pair[side]]))
-        work.push_back({e.pair[side], e.pair[1 - side], static_cast<Index>(k)});
+      if (analysable(bodies_[e.pair[side]])) work.push_back({e.pair[side], e.pair[1 - side], static_cast<Index>(k)});
   }
   std::sort(work.begin(), work.end());
   std::vector<std::pair<Index, Index>> analyse;
@@ -851,7 +848,8 @@ void World::process_impacts() {
     state.plastic_strain = body.plastic_strain;
     state.solver = body.solver;
     auto result = analyze_impact(*body.model, state, contacts_of[k], settings);
-    if (!result) log_warning("world: the impact analysis of body " + std::to_string(id) + " failed: " + result.error().message);
+    if (!result)
+      log_warning("world: the impact analysis of body " + std::to_string(id) + " failed: " + result.error().message);
     if (!result || !result->analysed) continue;
     ++stats_.impacts;
     apply_impact(id, other_id, *result);
