@@ -66,6 +66,7 @@
 #include "shatter/world/world.h"
 
 // Static analysis of a mesh under a load case, and its result files.
+#include "shatter/scene/scene.h"
 #include "shatter/scene/static_analysis.h"
 #include "shatter/scene/static_case.h"
 #include "shatter/scene/static_fracture.h"

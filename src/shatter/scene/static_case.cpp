@@ -12,6 +12,7 @@
 #include "shatter/core/file_io.h"
 #include "shatter/core/json_reader.h"
 #include "shatter/mesh/topology.h"
+#include "shatter/scene/material_json.h"
 
 namespace shatter {
 namespace {
@@ -181,78 +182,6 @@ Result<LoadSpec> read_load(const Json& value, const Where& where) {
 }
 
 // "glass" | {"preset": "glass", "youngs_modulus": ...} | {"youngs_modulus": ..., ...}
-Result<Material> read_material(const Json& value, const Where& where) {
-  if (value.is_string()) {
-    SHATTER_TRY(name, json_input::read_string(value, where));
-    auto m = material_preset(*name);
-    if (!m.ok()) return where.error(m.error().message);
-    return std::move(*m);
-  }
-  ObjectReader r(value, where);
-  if (!r.status().ok())
-    return where.error("expected a preset name (a string) or an object with material values, got " +
-                       json_input::type_name(value));
-  // Without a preset only what the file gives counts: the strengths and toughness start unknown.
-  Material m;
-  m.tensile_strength = kInfinity;
-  m.yield_stress = kInfinity;
-  m.fracture_toughness = kInfinity;
-  bool from_preset = false;
-  if (const Json* jp = r.get("preset")) {
-    SHATTER_TRY(name, json_input::read_string(*jp, where.key("preset")));
-    auto preset = material_preset(*name);
-    if (!preset.ok()) return where.key("preset").error(preset.error().message);
-    m = std::move(*preset);
-    from_preset = true;
-  }
-  if (const Json* jn = r.get("name")) {
-    SHATTER_TRY(name, json_input::read_string(*jn, where.key("name")));
-    m.name = *name;
-  } else if (!from_preset) {
-    m.name = "custom";
-  }
-  struct Num {
-    const char* key;
-    double* target;
-    bool required;  // without a preset
-  };
-  const Num nums[] = {
-      {"youngs_modulus", &m.youngs_modulus, true},
-      {"poisson_ratio", &m.poisson_ratio, true},
-      {"density", &m.density, true},
-      {"tensile_strength", &m.tensile_strength, false},
-      {"yield_stress", &m.yield_stress, false},
-      {"fracture_toughness", &m.fracture_toughness, false},
-  };
-  bool overridden = false;
-  for (const Num& n : nums) {
-    const Json* j = r.get(n.key);
-    if (!j) {
-      if (n.required && !from_preset)
-        return where.key(n.key).error(
-            "missing; a material without \"preset\" needs youngs_modulus (Pa), "
-            "poisson_ratio and density (kg/m^3)");
-      continue;
-    }
-    // Strengths may be "inf" (never cracks / never yields).
-    if (j->is_string() && j->get<std::string>() == "inf" && !n.required) {
-      *n.target = kInfinity;
-    } else {
-      SHATTER_TRY(v, json_input::read_number(*j, where.key(n.key)));
-      *n.target = *v;
-    }
-    overridden = true;
-  }
-  if (from_preset && overridden && !r.has("name")) m.name += " (modified)";
-  SHATTER_TRY(done, r.finish());
-  auto valid = validate_material(m);
-  if (!valid.ok()) {
-    const std::string& f = valid.error().field;
-    return (f.empty() ? where : where.key(f)).error(valid.error().message);
-  }
-  return m;
-}
-
 Result<CaseSolverSettings> read_solver(const Json& value, const Where& where) {
   ObjectReader r(value, where);
   if (!r.status().ok()) return r.status().error();
@@ -351,6 +280,78 @@ Result<FractureOptions> read_fracture(const Json& value, const Where& where) {
 
 }  // namespace
 
+Result<Material> read_material_json(const Json& value, const Where& where) {
+  if (value.is_string()) {
+    SHATTER_TRY(name, json_input::read_string(value, where));
+    auto m = material_preset(*name);
+    if (!m.ok()) return where.error(m.error().message);
+    return std::move(*m);
+  }
+  ObjectReader r(value, where);
+  if (!r.status().ok())
+    return where.error("expected a preset name (a string) or an object with material values, got " +
+                       json_input::type_name(value));
+  // Without a preset only what the file gives counts: the strengths and toughness start unknown.
+  Material m;
+  m.tensile_strength = kInfinity;
+  m.yield_stress = kInfinity;
+  m.fracture_toughness = kInfinity;
+  bool from_preset = false;
+  if (const Json* jp = r.get("preset")) {
+    SHATTER_TRY(name, json_input::read_string(*jp, where.key("preset")));
+    auto preset = material_preset(*name);
+    if (!preset.ok()) return where.key("preset").error(preset.error().message);
+    m = std::move(*preset);
+    from_preset = true;
+  }
+  if (const Json* jn = r.get("name")) {
+    SHATTER_TRY(name, json_input::read_string(*jn, where.key("name")));
+    m.name = *name;
+  } else if (!from_preset) {
+    m.name = "custom";
+  }
+  struct Num {
+    const char* key;
+    double* target;
+    bool required;  // without a preset
+  };
+  const Num nums[] = {
+      {"youngs_modulus", &m.youngs_modulus, true},
+      {"poisson_ratio", &m.poisson_ratio, true},
+      {"density", &m.density, true},
+      {"tensile_strength", &m.tensile_strength, false},
+      {"yield_stress", &m.yield_stress, false},
+      {"fracture_toughness", &m.fracture_toughness, false},
+  };
+  bool overridden = false;
+  for (const Num& n : nums) {
+    const Json* j = r.get(n.key);
+    if (!j) {
+      if (n.required && !from_preset)
+        return where.key(n.key).error(
+            "missing; a material without \"preset\" needs youngs_modulus (Pa), "
+            "poisson_ratio and density (kg/m^3)");
+      continue;
+    }
+    // Strengths may be "inf" (never cracks / never yields).
+    if (j->is_string() && j->get<std::string>() == "inf" && !n.required) {
+      *n.target = kInfinity;
+    } else {
+      SHATTER_TRY(v, json_input::read_number(*j, where.key(n.key)));
+      *n.target = *v;
+    }
+    overridden = true;
+  }
+  if (from_preset && overridden && !r.has("name")) m.name += " (modified)";
+  SHATTER_TRY(done, r.finish());
+  auto valid = validate_material(m);
+  if (!valid.ok()) {
+    const std::string& f = valid.error().field;
+    return (f.empty() ? where : where.key(f)).error(valid.error().message);
+  }
+  return m;
+}
+
 Result<StaticCase> parse_static_case(std::string_view json_text, const std::string& file) {
   SHATTER_TRY(doc, json_input::parse_json(json_text, file));
   const Where root{&file, ""};
@@ -377,7 +378,7 @@ Result<StaticCase> parse_static_case(std::string_view json_text, const std::stri
         .error("missing; expected a preset name (" + list +
                ") or an object with youngs_modulus, poisson_ratio, density");
   }
-  SHATTER_TRY(material, read_material(*jmat, root.key("material")));
+  SHATTER_TRY(material, read_material_json(*jmat, root.key("material")));
   c.material = std::move(*material);
   if (const Json* j = r.get("model")) {
     SHATTER_TRY(v, json_input::read_string(*j, root.key("model")));

@@ -1,0 +1,225 @@
+// Scene files and `shatter run`: every mistake named with its JSON path, the bundled scenes run,
+// the same hash on any thread count, outputs that read back (meshio) and stay complete when a run
+// is stopped.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "shatter/core/parallel.h"
+#include "shatter/scene/scene.h"
+#include "support/test_support.h"
+
+namespace shatter {
+namespace {
+
+std::string scenes_dir() { return std::string(SHATTER_SOURCE_DIR) + "/scenes"; }
+
+// A valid scene with one vase, `extra` spliced into the top-level object and `body_extra` into the
+// body's.
+std::string scene_text(const std::string& extra = "", const std::string& body_extra = "") {
+  return R"({"name": "t", "duration": 0.1, )" + extra +
+         R"( "bodies": [{"name": "vase", "mesh": "../assets/meshes/vase.msh", "material": "porcelain", "height": 0.5)" +
+         body_extra + "}]}";
+}
+
+Result<Scene> parse(const std::string& text) { return parse_scene(text, "scene.json", scenes_dir()); }
+
+TEST(SceneFile, ParsesAValidScene) {
+  auto s = parse(scene_text(
+      R"("world": {"time_step": 0.01, "substeps": 4, "gravity": [0, -10, 0]}, "ground": {"height": 0.1, "friction": 0.3}, "impact": {"collision_radius": 0.4}, "materials": {"china": {"preset": "porcelain", "tensile_strength": 30e6}}, "actions": [{"time": 0.05, "type": "strike", "body": "vase", "impulse": [1, 0, 0], "speed": 5}],)",
+      R"(, "rotation": {"axis": [0, 0, 1], "degrees": 90}, "velocity": [1, 0, 0], "impact": {"max_plastic_strain": 0.5})"));
+  ASSERT_OK(s);
+  EXPECT_EQ(s->name, "t");
+  EXPECT_EQ(s->world.substeps, 4);
+  EXPECT_DOUBLE_EQ(s->world.time_step, 0.01);
+  EXPECT_DOUBLE_EQ(s->ground_height, 0.1);
+  ASSERT_EQ(s->bodies.size(), 1U);
+  EXPECT_DOUBLE_EQ(s->bodies[0].impact.collision_radius, 0.4);                        // the scene's
+  EXPECT_DOUBLE_EQ(s->bodies[0].impact.fracture.plasticity.max_plastic_strain, 0.5);  // the body's
+  EXPECT_NEAR((s->bodies[0].rotation * Vec3::UnitX() - Vec3::UnitY()).norm(), 0, 1e-15);
+  ASSERT_EQ(s->actions.size(), 1U);
+  EXPECT_EQ(s->actions[0].kind, SceneAction::Kind::strike);
+  EXPECT_FALSE(s->actions[0].point_given);
+}
+
+TEST(SceneFile, EveryMistakeIsNamed) {
+  struct Bad {
+    std::string text;
+    std::string expected;  // a part of the message
+  };
+  const Bad cases[] = {
+      {"{", "scene.json:1: invalid JSON"},
+      {"[]", "object"},
+      {R"({"bodies": []})", "bodies: expected at least one body"},
+      {R"({"name": "x"})", "bodies: missing"},
+      {scene_text(R"("bodys": 1,)"), "bodys: unknown key"},
+      {scene_text(R"("duration": -1,)").replace(scene_text().find("\"duration\": 0.1, "), 0, ""), "duration"},
+      {scene_text(R"("world": {"substeps": 0},)"), "world.substeps: expected an integer in [1, 1000]"},
+      {scene_text(R"("world": {"time_step": "fast"},)"), "world.time_step"},
+      {scene_text(R"("world": {"contact_mode": "magic"},)"), "world.contact_mode"},
+      {scene_text(R"("ground": 3,)"), "ground: expected true, false"},
+      {scene_text(R"("impact": {"hold": "glue"},)"), "impact.hold"},
+      {scene_text("", R"(, "material": "unobtainium")"), "bodies[0].material"},
+      {scene_text("", R"(, "shape": "x.json")"), "bodies[0]: give either \"mesh\" or \"shape\""},
+      {scene_text("", R"(, "rotation": {"axis": [0, 0, 0], "degrees": 3})"), "bodies[0].rotation.axis"},
+      {scene_text("", R"(, "type": "floating")"), "bodies[0].type"},
+      {scene_text("", R"(, "heigth": 1)"), "did you mean \"height\""},
+      {scene_text("", R"(, "friction": -1)"), "bodies[0].friction"},
+      {scene_text("", R"(, "impact": {"max_fragments": 0})"), "bodies[0].impact.max_fragments"},
+      {scene_text(R"("actions": [{"time": 0, "type": "strike", "body": "vsae", "impulse": [1, 0, 0], "speed": 1}],)"),
+       "actions[0].body: no body is named \"vsae\""},
+      {scene_text(R"("actions": [{"time": 0, "type": "strike", "body": "vase", "impulse": [1, 0, 0]}],)"),
+       "actions[0].speed: missing"},
+      {scene_text(R"("actions": [{"time": 0, "type": "press", "body": "vase", "force": [1, 0, 0]}],)"),
+       "actions[0].duration: missing"},
+      {scene_text(R"("actions": [{"time": 0, "type": "press", "body": "vase", "impulse": [1, 0, 0], "duration": 1}],)"),
+       "actions[0].impulse: a press takes \"force\""},
+      {scene_text(R"("actions": [{"time": 0, "type": "kick", "body": "vase", "impulse": [1, 0, 0]}],)"),
+       "actions[0].type"},
+      {scene_text(R"("output": {"frames_per_second": -2},)"), "output.frames_per_second"},
+      {R"({"bodies": [{"mesh": "a.msh", "material": "glass", "name": "a"}, {"mesh": "a.msh", "material": "glass", "name": "a"}]})",
+       "bodies[1].name: a second body named \"a\""},
+  };
+  for (const Bad& c : cases) {
+    auto s = parse(c.text);
+    ASSERT_FALSE(s.ok()) << c.text;
+    const std::string message = s.error().to_string();
+    EXPECT_NE(message.find("scene.json"), std::string::npos) << message;
+    EXPECT_NE(message.find(c.expected), std::string::npos) << "expected \"" << c.expected << "\" in: " << message;
+  }
+  // Files that do not exist are named when the scene is built.
+  auto missing = parse(scene_text().replace(scene_text().find("vase.msh"), 8, "nope.msh"));
+  ASSERT_OK(missing);
+  auto built = build_scene(*missing);
+  ASSERT_FALSE(built.ok());
+  EXPECT_NE(built.error().to_string().find("body \"vase\""), std::string::npos) << built.error().to_string();
+  EXPECT_NE(built.error().to_string().find("nope.msh"), std::string::npos);
+}
+
+TEST(SceneRun, EveryBundledSceneRuns) {
+  int count = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(scenes_dir())) {
+    if (entry.path().extension() != ".json") continue;
+    ++count;
+    auto scene = read_scene(entry.path().string());
+    ASSERT_OK(scene);
+    test::TempDir dir;
+    auto run = run_scene(*scene, {.out_dir = dir.path().string(), .duration = 0.1});
+    ASSERT_OK(run);
+    EXPECT_EQ(run->steps, 6) << entry.path();
+    EXPECT_GE(run->bodies, 1);
+  }
+  EXPECT_GE(count, 3);
+}
+
+std::uint64_t vase_hash(int threads) {
+  const int saved = num_threads();
+  set_num_threads(threads);
+  auto scene = read_scene(scenes_dir() + "/vase_drop.json");
+  EXPECT_TRUE(scene.ok());
+  auto run = run_scene(*scene, {});
+  set_num_threads(saved);
+  EXPECT_TRUE(run.ok());
+  EXPECT_GE(run->fragments, 2);  // it broke
+  return run->state_hash;
+}
+
+TEST(SceneRun, SameHashOnAnyThreadCount) { EXPECT_EQ(vase_hash(1), vase_hash(2)); }
+
+// Outputs: the frames and the series read back with meshio; events and summary parse; a run
+// stopped early leaves them complete.
+TEST(SceneRun, OutputsReadBackAndSurviveAStop) {
+  auto scene = read_scene(scenes_dir() + "/vase_drop.json");
+  ASSERT_OK(scene);
+  test::TempDir dir;
+  std::atomic<bool> stop{false};
+  RunOptions options{.out_dir = dir.path().string(), .stop = &stop};
+  options.progress = [&](double t, std::int64_t, Index) {
+    if (t > 0.9) stop = true;  // after the impact
+  };
+  auto run = run_scene(*scene, options);
+  ASSERT_OK(run);
+  EXPECT_TRUE(run->stopped);
+  EXPECT_LT(run->simulated_time, 1.0);
+  std::ifstream summary_file(dir.path() / "summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(summary_file);
+  EXPECT_TRUE(summary.at("stopped").get<bool>());
+  EXPECT_EQ(summary.at("steps").get<std::int64_t>(), run->steps);
+  EXPECT_EQ(summary.at("bodies").size(), static_cast<std::size_t>(run->bodies));
+  std::ifstream events_file(dir.path() / "events.jsonl");
+  std::string line;
+  int impacts = 0;
+  while (std::getline(events_file, line)) {
+    const nlohmann::json e = nlohmann::json::parse(line);
+    impacts += e.at("type") == "impact";
+    EXPECT_LE(e.at("time").get<double>(), run->simulated_time + 1e-12);
+  }
+  EXPECT_EQ(impacts, run->impacts);
+  // The series lists only frames that exist.
+  std::ifstream pvd_file(dir.path() / "scene.pvd");
+  std::stringstream pvd;
+  pvd << pvd_file.rdbuf();
+  int frames = 0;
+  for (std::size_t at = pvd.str().find("file=\""); at != std::string::npos; at = pvd.str().find("file=\"", at + 1)) {
+    const std::size_t end = pvd.str().find('"', at + 6);
+    EXPECT_TRUE(std::filesystem::exists(dir.path() / pvd.str().substr(at + 6, end - at - 6)));
+    ++frames;
+  }
+  EXPECT_GE(frames, 25);
+  // meshio reads the series and the last frame.
+  const bool meshio = test::run_command("/usr/bin/python3 -c 'import meshio' 2>/dev/null").status == 0;
+  SHATTER_REQUIRE_TOOL(meshio, "/usr/bin/python3 cannot import meshio");
+  const std::string py =
+      "import meshio,sys,glob\n"
+      "fs=sorted(glob.glob(sys.argv[1]+'/frames/*.vtu'))\n"
+      "m=meshio.read(fs[-1])\n"
+      "assert m.cells_dict['tetra'].shape[0]>0\n"
+      "assert 'body' in m.cell_data and 'plastic_strain' in m.cell_data and 'rest' in m.point_data\n"
+      "print(len(fs), m.cells_dict['tetra'].shape[0])\n";
+  std::ofstream(dir.path() / "check.py") << py;
+  const test::CommandResult r =
+      test::run_command("/usr/bin/python3 " + (dir.path() / "check.py").string() + " " + dir.path().string(), true);
+  EXPECT_EQ(r.status, 0) << r.output;
+}
+
+// Ctrl-C: the run stops after the current step, exits 130 and leaves complete files.
+TEST(SceneRun, CliInterruptLeavesCompleteFiles) {
+  test::TempDir dir;
+  const std::string out = (dir.path() / "out").string();
+  const test::CommandResult r = test::run_command("timeout --preserve-status -s INT 0.7 " + test::cli_path() + " run " +
+                                                      scenes_dir() + "/teddy_drops.json --out " + out,
+                                                  true);
+  ASSERT_EQ(r.status, 130) << r.output;
+  std::ifstream summary_file(dir.path() / "out" / "summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(summary_file);
+  EXPECT_TRUE(summary.at("stopped").get<bool>());
+  EXPECT_LT(summary.at("simulated_time").get<double>(), 5.0);
+  std::ifstream events_file(dir.path() / "out" / "events.jsonl");
+  std::string line;
+  while (std::getline(events_file, line)) EXPECT_TRUE(nlohmann::json::accept(line)) << line;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path() / "out"))
+    EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << entry.path();
+}
+
+TEST(SceneRun, CliRunsTheBundledVaseDrop) {
+  test::TempDir dir;
+  const test::CommandResult r =
+      test::run_command(test::cli_path() + " run --time 0.2 --json --out " + (dir.path() / "out").string(), false);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j.at("scene"), "vase_drop");
+  EXPECT_EQ(j.at("steps"), 12);
+  EXPECT_TRUE(std::filesystem::exists(dir.path() / "out" / "summary.json"));
+  const test::CommandResult bad = test::run_command(test::cli_path() + " run /nonexistent.json", true);
+  EXPECT_EQ(bad.status, 3) << bad.output;
+  EXPECT_NE(bad.output.find("/nonexistent.json"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace shatter
