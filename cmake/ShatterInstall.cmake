@@ -18,4 +18,8 @@ install(FILES ${PROJECT_BINARY_DIR}/shatterConfig.cmake ${PROJECT_BINARY_DIR}/sh
   DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/shatter)
 if(SHATTER_BUILD_APPS)
   install(TARGETS shatter_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+  # The bundled scenes and the meshes they name, at the same relative paths (`shatter run` finds
+  # share/shatter/scenes/vase_drop.json beside an installed binary).
+  install(DIRECTORY ${PROJECT_SOURCE_DIR}/scenes DESTINATION ${CMAKE_INSTALL_DATADIR}/shatter)
+  install(DIRECTORY ${PROJECT_SOURCE_DIR}/assets/meshes DESTINATION ${CMAKE_INSTALL_DATADIR}/shatter/assets)
 endif()

@@ -37,13 +37,11 @@ extern "C" void on_interrupt(int /*signal*/) { g_stop.store(true); }
 // The bundled vase drop: scenes/vase_drop.json in the current folder, or beside the source tree
 // the program was built in, or in an installed share/shatter.
 std::string default_scene() {
-  std::vector<std::filesystem::path> candidates = {"scenes/vase_drop.json"};
+  std::vector<std::filesystem::path> candidates = {"scenes/vase_drop.json",
+                                                   std::filesystem::path(SHATTER_SOURCE_DIR) / "scenes/vase_drop.json"};
   std::error_code ec;
   const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (!ec) {
-    candidates.push_back(exe.parent_path() / "../../scenes/vase_drop.json");
-    candidates.push_back(exe.parent_path() / "../share/shatter/scenes/vase_drop.json");
-  }
+  if (!ec) candidates.push_back(exe.parent_path() / "../share/shatter/scenes/vase_drop.json");
   for (const auto& c : candidates)
     if (std::filesystem::is_regular_file(c, ec)) return c.lexically_normal().string();
   return "scenes/vase_drop.json";
