@@ -23,6 +23,9 @@ Output is deterministic: fixed size and dpi, no software/date metadata.
   --color-by NAME   colour each boundary triangle by the cell array NAME of its tet (e.g.
                     display_stress of fragments.vtu), diverging colormap centred at 0: tension
                     (positive) red, compression (negative) green; colorbar in Pa
+  --unit TEXT       the unit of --color-by on the colorbar (default Pa)
+  --color-cells NAME  colour each boundary triangle by the integer cell array NAME of its tet, one
+                    colour per value (e.g. body in the frames of `shatter run`)
   --explode F       move each fragment (cell array fragment_id) away from the overall centroid by
                     F times its centroid's offset
   --edges           draw the triangle edges thinly
@@ -35,6 +38,10 @@ The pictures in docs/images/ (docs/meshing.md):
     /usr/bin/python3 scripts/render_mesh.py /tmp/glass_bar/fragments.vtu --color-by display_stress \
         --explode 0.25 --edges --edge-width 0.5 --azim -125 --size 800x360 --palette \
         -o docs/images/glass_bar_fragments.png
+    build/release/bin/shatter run scenes/vase_drop.json --out /tmp/vase_drop
+    /usr/bin/python3 scripts/render_mesh.py /tmp/vase_drop/frames/frame_000060.vtu --color-cells body \
+        --edges --edge-width 0.2 --size 600x400 --palette -o docs/images/run_vase_drop.png
+    (the same for block_on_block, frame 45; teddy_drops, frame 150, with --color-by plastic_strain --unit "")
 """
 
 import argparse
@@ -164,7 +171,14 @@ def render(path, out, args):
     shade = 0.42 + 0.58 * np.clip(normal @ light, 0.0, 1.0)
 
     values = None
-    if args.color_by:
+    if args.color_cells:
+        if args.color_cells not in data:
+            names = ", ".join(sorted(data)) or "none"
+            raise SystemExit(f"render_mesh.py: no cell array {args.color_cells} in {path} (has: {names})")
+        labels = data[args.color_cells][owner].astype(np.int64)
+        _, index = np.unique(labels, return_inverse=True)
+        base = plt.get_cmap("tab10")(index % 10)[:, :3]
+    elif args.color_by:
         if args.color_by not in data:
             names = ", ".join(sorted(data)) or "none"
             raise SystemExit(f"render_mesh.py: no cell array {args.color_by} in {path} (has: {names})")
@@ -173,7 +187,7 @@ def render(path, out, args):
         norm = Normalize(-vmax, vmax)
         base = STRESS_CMAP(norm(values))[:, :3]
         shade = 0.5 + 0.5 * (shade - 0.42) / 0.58  # milder, so the colours stay readable
-    else:
+    if values is None and not args.color_cells:
         base = np.tile(BASE_COLOR, (len(tris), 1))
     face_rgb = np.clip(base * shade[:, None], 0.0, 1.0)
 
@@ -229,7 +243,7 @@ def render(path, out, args):
     if colorbar:
         cax = fig.add_axes([0.86, 0.18, 0.03, 0.64])
         bar = fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=STRESS_CMAP), cax=cax)
-        bar.set_label(f"{args.color_by} (Pa)")
+        bar.set_label(f"{args.color_by} ({args.unit})" if args.unit else args.color_by)
         bar.formatter.set_powerlimits((-3, 4))
         bar.formatter.set_useMathText(True)
         bar.ax.tick_params(labelsize=8)
@@ -280,6 +294,9 @@ def main():
     p.add_argument("meshes", nargs="+", metavar="MESH")
     p.add_argument("-o", "--out", required=True, help="PNG file (one MESH) or folder (several)")
     p.add_argument("--color-by", metavar="NAME", help="cell array to colour by (diverging, centred at 0)")
+    p.add_argument("--unit", default="Pa", help='unit of --color-by on the colorbar (default Pa; "" for none)')
+    p.add_argument("--color-cells", metavar="NAME",
+                   help="integer cell array to colour by, one colour per value (e.g. body of a shatter run frame)")
     p.add_argument("--explode", type=float, default=0.0, metavar="F", help="push fragments apart")
     p.add_argument("--edges", action="store_true", help="draw triangle edges")
     p.add_argument("--edge-width", type=float, default=0.3, metavar="PT", help="edge width (default 0.3 pt)")

@@ -241,6 +241,31 @@ TEST(SurfaceWrite, BinaryStlKeepsFloatPrecision) {
   expect_same_geometry(r->surface, s);
 }
 
+TEST(PlyWrite, FaceValuesAsFaceProperties) {
+  const TriSurface s = box_surface();
+  std::vector<std::int32_t> body(s.triangles.size()), crack(s.triangles.size());
+  for (std::size_t t = 0; t < body.size(); ++t) {
+    body[t] = static_cast<std::int32_t>(t / 4);
+    crack[t] = static_cast<std::int32_t>(t % 2);
+  }
+  for (const bool binary : {false, true}) {
+    std::ostringstream out;
+    ASSERT_OK(write_ply(out, s, {.binary = binary, .face_values = {{"body", body}, {"crack", crack}}}));
+    const std::string text = out.str();
+    EXPECT_NE(text.find("property list uchar int vertex_indices\nproperty int body\nproperty int crack\nend_header"),
+              std::string::npos);
+    if (!binary) {
+      EXPECT_NE(text.find("\n3 0 "), std::string::npos);
+    }
+    auto r = parse_ply(text, "t.ply");  // the reader skips the extra properties
+    ASSERT_OK(r);
+    expect_same_geometry(r->surface, s);
+  }
+  std::ostringstream out;
+  EXPECT_FALSE(write_ply(out, s, {.face_values = {{"body", {1, 2}}}}).ok());  // one value per triangle
+  EXPECT_FALSE(write_ply(out, s, {.face_values = {{"a b", body}}}).ok());     // a name without spaces
+}
+
 TEST(SurfaceWrite, FilesByExtensionAndBadInput) {
   test::TempDir dir;
   const TriSurface s = box_surface();

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "shatter/core/parallel.h"
+#include "shatter/mesh/io/mesh_io.h"
 #include "shatter/scene/scene.h"
 #include "support/test_support.h"
 
@@ -172,6 +173,13 @@ TEST(SceneRun, OutputsReadBackAndSurviveAStop) {
     ++frames;
   }
   EXPECT_GE(frames, 25);
+  // Surfaces at every frame, with crack faces once the vase broke.
+  auto surface = read_surface((dir.path() / "frames" / "surface_000027.ply").string());
+  ASSERT_OK(surface);
+  EXPECT_GT(surface->surface.triangles.size(), 1000U);
+  std::ifstream ply(dir.path() / "frames" / "surface_000027.ply", std::ios::binary);
+  std::string header((std::istreambuf_iterator<char>(ply)), {});
+  EXPECT_NE(header.find("property int crack"), std::string::npos);
   // meshio reads the series and the last frame.
   const bool meshio = test::run_command("/usr/bin/python3 -c 'import meshio' 2>/dev/null").status == 0;
   SHATTER_REQUIRE_TOOL(meshio, "/usr/bin/python3 cannot import meshio");

@@ -61,8 +61,11 @@ struct SceneAction {
 struct SceneOutput {
   double frames_per_second = 30;  ///< ParaView frames (0: none)
   bool vtu = true;                ///< frames/frame_<k>.vtu and scene.pvd
-  bool events = true;             ///< events.jsonl
-  bool summary = true;            ///< summary.json
+  /// Also the bodies' surfaces at each frame, frames/surface_<k>.<surfaces>: "ply" (with face
+  /// properties body and crack), "obj" or "stl"; "" for none.
+  std::string surfaces;
+  bool events = true;   ///< events.jsonl
+  bool summary = true;  ///< summary.json
 };
 
 /// A parsed scene file.

@@ -418,6 +418,12 @@ Result<Scene> parse_scene(std::string_view text, const std::string& file, const 
       SHATTER_TRY(v, read_in_range(*j, w.key("frames_per_second"), 0, 10000, "a rate in [0, 10000] (0: no frames)"));
       scene.output.frames_per_second = *v;
     }
+    if (const Json* j = orr.get("surfaces")) {
+      SHATTER_TRY(v, json_input::read_string(*j, w.key("surfaces")));
+      if (*v != "ply" && *v != "obj" && *v != "stl" && !v->empty())
+        return w.key("surfaces").error("expected \"ply\", \"obj\", \"stl\" or \"\" (none), got \"" + *v + "\"");
+      scene.output.surfaces = *v;
+    }
     for (const auto& [key, target] : {std::pair{"vtu", &scene.output.vtu}, std::pair{"events", &scene.output.events},
                                       std::pair{"summary", &scene.output.summary}})
       if (const Json* j = orr.get(key)) {
@@ -527,6 +533,30 @@ Result<void> write_frame(const std::string& path, const World& w) {
   return write_mesh(path, mesh, options);
 }
 
+// The surfaces of all live tet bodies at their poses, with the body slot and the crack flag of
+// each triangle (PLY face properties).
+Result<void> write_surfaces(const std::string& path, const World& w) {
+  TriSurface all;
+  std::vector<std::int32_t> body, crack;
+  for (Index slot = 0; slot < w.body_count(); ++slot) {
+    const BodyId id = w.body_id(slot);
+    if (w.removed(id) || !w.model(id)) continue;
+    const BodySurface surf = w.surface(id);
+    const auto base = static_cast<Index>(all.positions.size());
+    all.positions.insert(all.positions.end(), surf.positions.begin(), surf.positions.end());
+    for (std::size_t t = 0; t < surf.triangles.size(); ++t) {
+      const TriIndices& tri = surf.triangles[t];
+      all.triangles.push_back({tri[0] + base, tri[1] + base, tri[2] + base});
+      body.push_back(static_cast<std::int32_t>(slot));
+      crack.push_back(surf.crack_face[t]);
+    }
+  }
+  SurfaceWriteOptions options;
+  options.binary = true;
+  options.face_values = {{"body", std::move(body)}, {"crack", std::move(crack)}};
+  return write_surface(path, all, options);
+}
+
 Json vec_json(const Vec3& v) { return Json::array({v.x(), v.y(), v.z()}); }
 
 Json id_json(const BodyId& id) { return id.index; }
@@ -605,20 +635,13 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
   for (std::size_t i = 0; i < scene.bodies.size(); ++i) names[built->bodies[i].index] = scene.bodies[i].name;
 
   const std::string out = options.out_dir;
-  auto write_listing = [&]() -> Result<void> {
+  PvdSeries series(out + "/scene.pvd");
+  auto write_events = [&]() -> Result<void> {
+    if (!scene.output.events) return {};
     const auto t0 = Clock::now();
-    if (frames) {
-      std::string pvd = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
-      for (const auto& [t, f] : frame_files)
-        pvd += "    <DataSet timestep=\"" + Json(t).dump() + "\" part=\"0\" file=\"" + f + "\"/>\n";
-      pvd += "  </Collection>\n</VTKFile>\n";
-      SHATTER_TRY(ok, write_file_atomic(out + "/scene.pvd", pvd));
-    }
-    if (scene.output.events) {
-      std::string text;
-      for (const std::string& line : event_lines) text += line + "\n";
-      SHATTER_TRY(ok, write_file_atomic(out + "/events.jsonl", text));
-    }
+    std::string text;
+    for (const std::string& line : event_lines) text += line + "\n";
+    SHATTER_TRY(ok, write_file_atomic(out + "/events.jsonl", text));
     s.output_ms += ms_since(t0);
     return {};
   };
@@ -631,10 +654,17 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
     char name[64];
     std::snprintf(name, sizeof name, "frames/frame_%06zu.vtu", frame_files.size());
     SHATTER_TRY(ok, write_frame(out + "/" + name, w));
+    SHATTER_TRY(listed, series.add(t, name));
+    if (!scene.output.surfaces.empty()) {
+      char surface_name[64];
+      std::snprintf(surface_name, sizeof surface_name, "frames/surface_%06zu.%s", frame_files.size(),
+                    scene.output.surfaces.c_str());
+      SHATTER_TRY(wrote, write_surfaces(out + "/" + surface_name, w));
+    }
     frame_files.emplace_back(t, name);
     next_frame = static_cast<double>(frame_files.size()) / scene.output.frames_per_second;
     s.output_ms += ms_since(t0);
-    return write_listing();
+    return write_events();
   };
   if (write) {
     SHATTER_TRY(first, maybe_frame(true));
@@ -696,7 +726,7 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
     if (frames && (frame_files.empty() || frame_files.back().first + 0.5 * dt < w.time())) {
       SHATTER_TRY(last, maybe_frame(true));
     }
-    SHATTER_TRY(listed, write_listing());
+    SHATTER_TRY(listed, write_events());
     if (frames) s.files.push_back(out + "/scene.pvd");
     if (scene.output.events) s.files.push_back(out + "/events.jsonl");
     if (scene.output.summary) {

@@ -15,6 +15,7 @@
 #include <iosfwd>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "shatter/core/error.h"
@@ -126,12 +127,16 @@ struct SurfaceWriteOptions {
   /// File id of each vertex (e.g. the tet-mesh node id), written where the format can hold it
   /// (PLY property `id`; an OBJ comment). Empty: none.
   std::vector<FileId> vertex_ids;
+  /// Named integer values per triangle (e.g. "body", "crack"), written as PLY face properties;
+  /// the other formats leave them out. Each must have one value per triangle.
+  std::vector<std::pair<std::string, std::vector<std::int32_t>>> face_values;
 };
 /// Write any supported surface format by extension, atomically.
 Result<void> write_surface(const std::string& path, const TriSurface& surface, const SurfaceWriteOptions& options = {});
 /// Wavefront OBJ (v / f lines; vertex ids as comments).
 Result<void> write_obj(std::ostream& out, const TriSurface& surface, const SurfaceWriteOptions& options = {});
-/// PLY, ASCII or binary little-endian (vertex ids as property `id`).
+/// PLY, ASCII or binary little-endian (vertex ids as property `id`, face values as int face
+/// properties).
 Result<void> write_ply(std::ostream& out, const TriSurface& surface, const SurfaceWriteOptions& options = {});
 /// STL, ASCII or binary (vertex ids are not written).
 Result<void> write_stl(std::ostream& out, const TriSurface& surface, const SurfaceWriteOptions& options = {});

@@ -34,6 +34,13 @@ Result<void> check_surface(const TriSurface& s, const SurfaceWriteOptions& optio
   if (!options.vertex_ids.empty() && options.vertex_ids.size() != s.positions.size())
     return make_error("surface vertex_ids has " + std::to_string(options.vertex_ids.size()) + " entries for " +
                       std::to_string(n) + " vertices");
+  for (const auto& [name, values] : options.face_values) {
+    if (values.size() != s.triangles.size())
+      return make_error("surface face values \"" + name + "\" has " + std::to_string(values.size()) + " entries for " +
+                        std::to_string(s.triangles.size()) + " triangles");
+    if (name.empty() || name.find_first_of(" \t\r\n") != std::string::npos)
+      return make_error("surface face values need a name without spaces, got \"" + name + "\"");
+  }
   return {};
 }
 
@@ -445,8 +452,9 @@ Result<void> write_ply(std::ostream& out, const TriSurface& surface, const Surfa
   s += " 1.0\nelement vertex " + std::to_string(surface.positions.size()) +
        "\nproperty double x\nproperty double y\nproperty double z\n";
   if (ids) s += ids_fit_int ? "property int id\n" : "property int64 id\n";
-  s += "element face " + std::to_string(surface.triangles.size()) +
-       "\nproperty list uchar int vertex_indices\nend_header\n";
+  s += "element face " + std::to_string(surface.triangles.size()) + "\nproperty list uchar int vertex_indices\n";
+  for (const auto& face_value : options.face_values) s += "property int " + face_value.first + "\n";
+  s += "end_header\n";
   for (std::size_t i = 0; i < surface.positions.size(); ++i) {
     const Vec3& p = surface.positions[i];
     if (options.binary) {
@@ -470,15 +478,22 @@ Result<void> write_ply(std::ostream& out, const TriSurface& surface, const Surfa
     }
     flush_if_big(out, s);
   }
-  for (const TriIndices& t : surface.triangles) {
+  for (std::size_t f = 0; f < surface.triangles.size(); ++f) {
+    const TriIndices& t = surface.triangles[f];
     if (options.binary) {
       io::append_binary<std::uint8_t>(s, 3, false);
       for (Index v : t) io::append_binary<std::int32_t>(s, v, false);
+      for (const auto& face_value : options.face_values)
+        io::append_binary<std::int32_t>(s, face_value.second[f], false);
     } else {
       s += '3';
       for (Index v : t) {
         s += ' ';
         io::append_int(s, v);
+      }
+      for (const auto& face_value : options.face_values) {
+        s += ' ';
+        io::append_int(s, face_value.second[f]);
       }
       s += '\n';
     }
