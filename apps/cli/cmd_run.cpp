@@ -1,4 +1,4 @@
-// `shatter run [SCENE] [--out DIR] [--time T] [--threads N] [--json]`: simulate a scene file and
+// `shatter run [SCENE] [--out DIR | --no-output] [--time T] [--threads N] [--json]`: simulate a scene file and
 // write its outputs (docs/scenes.md). Without SCENE it runs the bundled vase drop. Progress goes to
 // stderr: one updating line on a terminal, a line every few seconds otherwise. Ctrl-C stops after
 // the current step with every file written so far complete.
@@ -28,6 +28,7 @@ struct RunArgs {
   double time = -1;
   int threads = -1;
   bool json = false;
+  bool no_output = false;
 };
 
 std::atomic<bool> g_stop{false};
@@ -56,7 +57,8 @@ int run(const RunArgs& args) {
   const int threads = args.threads >= 0 ? args.threads : scene->threads;
   if (threads > 0) set_num_threads(threads);
   RunOptions options;
-  options.out_dir = args.out_dir.empty() ? scene->name + "_out" : args.out_dir;
+  if (args.no_output && !args.out_dir.empty()) return report_error("--no-output and --out exclude each other", kExitUsage);
+  options.out_dir = args.no_output ? "" : args.out_dir.empty() ? scene->name + "_out" : args.out_dir;
   if (args.time >= 0) options.duration = args.time;
   options.stop = &g_stop;
   const bool tty = isatty(fileno(stderr)) != 0;
@@ -115,6 +117,7 @@ RunFn setup_run(CLI::App& sub) {
   sub.add_option("--threads", args->threads, "Threads (default: the scene's, else all; results are the same)")
       ->check(CLI::NonNegativeNumber);
   sub.add_flag("--json", args->json, "Print the summary as JSON");
+  sub.add_flag("--no-output", args->no_output, "Write no files (timing runs)");
   return [args] { return run(*args); };
 }
 
