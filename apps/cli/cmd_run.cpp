@@ -57,7 +57,8 @@ int run(const RunArgs& args) {
   const int threads = args.threads >= 0 ? args.threads : scene->threads;
   if (threads > 0) set_num_threads(threads);
   RunOptions options;
-  if (args.no_output && !args.out_dir.empty()) return report_error("--no-output and --out exclude each other", kExitUsage);
+  if (args.no_output && !args.out_dir.empty())
+    return report_error("--no-output and --out exclude each other", kExitUsage);
   options.out_dir = args.no_output ? "" : args.out_dir.empty() ? scene->name + "_out" : args.out_dir;
   if (args.time >= 0) options.duration = args.time;
   options.stop = &g_stop;
