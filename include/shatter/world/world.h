@@ -353,6 +353,15 @@ class World {
   [[nodiscard]] Aabb slot_bounds(Index slot) const;
   /// The slot of a valid, not removed id, or an error naming `what` was called.
   [[nodiscard]] Result<Index> live_slot(BodyId id, const char* what) const;
+  /// The paper's contact shape (in that mode), bounds and radius of a tet model's shape.
+  void finish_tet_shape(Shape& shape, const BodyModel& model) const;
+  /// The impact settings of `body` against `other` (null: an obstacle), with the world's debris
+  /// budget applied.
+  [[nodiscard]] ImpactSettings impact_settings(const Body& body, const Material* other) const;
+  /// What analyze_impact reads of a body.
+  static BodyState impact_state(const Body& body);
+  /// Drop the contacts and open events of removed bodies.
+  void forget_removed();
   /// Convex pieces (and the paper's contact shape) of a tet model.
   [[nodiscard]] Result<std::shared_ptr<const Shape>> make_tet_shape(const BodyModel& model) const;
   /// The shape of a model added by the user: built once per process for each model and settings
@@ -424,6 +433,7 @@ class World {
   std::vector<Aabb> boxes_;
   std::vector<PairRef> pairs_;
   std::vector<std::vector<Contact>> pair_contacts_;
+  std::vector<Contact> next_contacts_;  ///< the narrow phase's output buffer (swapped with contacts_)
   std::vector<SolverBody> solver_bodies_;
   std::vector<Index> island_parent_;
   std::vector<Index> island_of_;

@@ -624,7 +624,8 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
   const bool write = !options.out_dir.empty();
   const bool frames = write && scene.output.vtu && scene.output.frames_per_second > 0;
   std::vector<std::string> event_lines;
-  std::vector<std::pair<double, std::string>> frame_files;  // (time, file name under out_dir)
+  std::size_t frame_count = 0;
+  double last_frame_time = -1;  // s
   if (write) {
     std::error_code ec;
     std::filesystem::create_directories(std::filesystem::path(options.out_dir) / (frames ? "frames" : ""), ec);
@@ -652,17 +653,18 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
     if (!force && t + 0.5 * dt < next_frame) return {};
     const auto t0 = Clock::now();
     char name[64];
-    std::snprintf(name, sizeof name, "frames/frame_%06zu.vtu", frame_files.size());
+    std::snprintf(name, sizeof name, "frames/frame_%06zu.vtu", frame_count);
     SHATTER_TRY(ok, write_frame(out + "/" + name, w));
     SHATTER_TRY(listed, series.add(t, name));
     if (!scene.output.surfaces.empty()) {
       char surface_name[64];
-      std::snprintf(surface_name, sizeof surface_name, "frames/surface_%06zu.%s", frame_files.size(),
+      std::snprintf(surface_name, sizeof surface_name, "frames/surface_%06zu.%s", frame_count,
                     scene.output.surfaces.c_str());
       SHATTER_TRY(wrote, write_surfaces(out + "/" + surface_name, w));
     }
-    frame_files.emplace_back(t, name);
-    next_frame = static_cast<double>(frame_files.size()) / scene.output.frames_per_second;
+    ++frame_count;
+    last_frame_time = t;
+    next_frame = static_cast<double>(frame_count) / scene.output.frames_per_second;
     s.output_ms += ms_since(t0);
     return write_events();
   };
@@ -723,7 +725,7 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
   s.bodies = w.live_body_count() - (scene.ground ? 1 : 0);
   s.state_hash = w.state_hash();
   if (write) {
-    if (frames && (frame_files.empty() || frame_files.back().first + 0.5 * dt < w.time())) {
+    if (frames && last_frame_time + 0.5 * dt < w.time()) {
       SHATTER_TRY(last, maybe_frame(true));
     }
     SHATTER_TRY(listed, write_events());
@@ -758,7 +760,7 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
           {"impacts", s.impacts},
           {"cracks", s.cracks},
           {"debris_mass", s.debris_mass},
-          {"frames", frame_files.size()},
+          {"frames", frame_count},
           {"timings_ms",
            {{"rigid", s.rigid_ms}, {"impacts", s.impact_ms}, {"output", s.output_ms}, {"wall", s.wall_ms}}},
           {"state_hash", hex64(s.state_hash)}};

@@ -181,6 +181,15 @@ Result<BodyId> World::add_body(std::shared_ptr<const BodyModel> model, const Bod
   return body_id(add(def, std::move(*shape), std::move(model)));
 }
 
+void World::finish_tet_shape(Shape& shape, const BodyModel& model) const {
+  if (settings_.contact_mode == ContactMode::tet_vertices)
+    shape.tet.push_back(make_tet_contact_shape(model.mesh, model.faces));
+  for (const Vec3& x : model.mesh.positions) {
+    shape.local_bounds.extend(x);
+    shape.radius = std::max(shape.radius, x.norm());
+  }
+}
+
 Result<std::shared_ptr<const World::Shape>> World::make_tet_shape(const BodyModel& model) const {
   auto shape = std::make_shared<Shape>();
   auto pieces = decompose_convex(model.mesh, model.faces, settings_.decomposition);
@@ -189,12 +198,7 @@ Result<std::shared_ptr<const World::Shape>> World::make_tet_shape(const BodyMode
     shape->pieces.push_back(std::move(p.hull));
     shape->piece_tets.push_back(std::move(p.tets));
   }
-  if (settings_.contact_mode == ContactMode::tet_vertices)
-    shape->tet.push_back(make_tet_contact_shape(model.mesh, model.faces));
-  for (const Vec3& x : model.mesh.positions) {
-    shape->local_bounds.extend(x);
-    shape->radius = std::max(shape->radius, x.norm());
-  }
+  finish_tet_shape(*shape, model);
   return std::shared_ptr<const Shape>(std::move(shape));
 }
 
@@ -246,12 +250,7 @@ Result<std::shared_ptr<const World::Shape>> World::shape_from_clusters(std::vect
     shape->pieces.push_back(std::move(*hull));
   }
   shape->piece_tets = std::move(clusters);
-  if (settings_.contact_mode == ContactMode::tet_vertices)
-    shape->tet.push_back(make_tet_contact_shape(model.mesh, model.faces));
-  for (const Vec3& x : model.mesh.positions) {
-    shape->local_bounds.extend(x);
-    shape->radius = std::max(shape->radius, x.norm());
-  }
+  finish_tet_shape(*shape, model);
   return std::shared_ptr<const Shape>(std::move(shape));
 }
 
@@ -525,7 +524,10 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
 
   // Gather in pair order, carry the impulses of matching features (warm start), and settle the
   // pairs waiting to come apart.
-  std::vector<Contact> next;
+  // Into the buffer of the step before last: the contacts are about a kilobyte each, and a fresh
+  // vector every step went through the allocator's mmap path (page faults) for large scenes.
+  std::vector<Contact>& next = next_contacts_;
+  next.clear();
   std::vector<std::array<Index, 2>> still_together;
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     std::vector<Contact>& found = pair_contacts_[k];
@@ -561,7 +563,7 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
     }
   }
   until_apart_ = std::move(still_together);
-  contacts_ = std::move(next);
+  contacts_.swap(next);
 }
 
 void World::update_islands_and_wake() {
@@ -741,61 +743,62 @@ void World::process_impacts() {
   std::vector<std::size_t> ready;  // events of `next` to analyse now
   auto old = open_impacts_.begin();
   for (std::size_t i = 0; i < contacts_.size();) {
-    std::size_t j = i;
     const Index a = contacts_[i].body_a;
     const Index b = contacts_[i].body_b;
+    const std::size_t first = i;
+    double approach = 0;  // fastest approach of a pushing point before the solve
+    bool touches = false;
+    for (; i < contacts_.size() && contacts_[i].body_a == a && contacts_[i].body_b == b; ++i) {
+      const ContactConstraint& cc = contacts_[i].constraint;
+      for (int k = 0; k < cc.count; ++k) {
+        const ContactPoint& p = cc.points[k];
+        touches |= p.separation <= 0 || p.total_normal_impulse > 0;
+        if (p.total_normal_impulse > 0) approach = std::max(approach, p.approach_speed);
+      }
+    }
+    while (old != open_impacts_.end() && old->pair < std::array<Index, 2>{a, b}) ++old;
+    const bool was_open = old != open_impacts_.end() && old->pair == std::array<Index, 2>{a, b};
+    if (!touches) continue;  // apart: its event (if any) closes
     const Body& ba = bodies_[a];
     const Body& bb = bodies_[b];
-    double approach = 0;       // fastest approach of a pushing point before the solve
-    double still_closing = 0;  // fastest approach of a pushing point after it
-    bool touches = false;
-    std::vector<OpenImpact::Point> points;
+    if (was_open) {
+      next.push_back(*old);
+      ++next.back().steps;
+      if (next.back().analysed) continue;  // nothing more to collect
+    } else {
+      const double threshold = std::min(settings_of(ba).min_approach_speed, settings_of(bb).min_approach_speed);
+      if (approach < threshold || (!analysable(ba) && !analysable(bb))) continue;
+      next.push_back({.pair = {a, b}});
+    }
+    // Collect the pushing points (only for events still collecting), and how fast the pair still
+    // closes after the solve.
+    OpenImpact& e = next.back();
+    e.approach = std::max(e.approach, approach);
+    double still_closing = 0;
     const Mat3 ra = ba.rigid.orientation.toRotationMatrix();
     const Mat3 rb = bb.rigid.orientation.toRotationMatrix();
-    for (; j < contacts_.size() && contacts_[j].body_a == a && contacts_[j].body_b == b; ++j) {
+    for (std::size_t j = first; j < i; ++j) {
       const ContactConstraint& cc = contacts_[j].constraint;
       for (int k = 0; k < cc.count; ++k) {
         const ContactPoint& p = cc.points[k];
-        if (p.separation <= 0) touches = true;
         if (!(p.total_normal_impulse > 0)) continue;
-        touches = true;
-        approach = std::max(approach, p.approach_speed);
         // The manifold point lies midway across the gap the step started with: move it onto each
         // surface.
         const Vec3 half_gap = 0.5 * std::max(p.separation, 0.0) * cc.normal;
         const Vec3 pa = ba.rigid.position + ra * p.local_anchor_a - half_gap;
         const Vec3 pb = bb.rigid.position + rb * p.local_anchor_b + half_gap;
         still_closing = std::max(still_closing, -cc.normal.dot(velocity_at(bb, pb) - velocity_at(ba, pa)));
-        points.push_back({.local_a = ra.transpose() * (pa - ba.rigid.position),
-                          .local_b = rb.transpose() * (pb - bb.rigid.position),
-                          .normal_a = ra.transpose() * -cc.normal,
-                          .normal_b = rb.transpose() * cc.normal,
-                          .impulse = p.total_normal_impulse,
-                          .approach = p.approach_speed});
+        e.points.push_back({.local_a = ra.transpose() * (pa - ba.rigid.position),
+                            .local_b = rb.transpose() * (pb - bb.rigid.position),
+                            .normal_a = ra.transpose() * -cc.normal,
+                            .normal_b = rb.transpose() * cc.normal,
+                            .impulse = p.total_normal_impulse,
+                            .approach = p.approach_speed});
       }
-    }
-    i = j;
-    while (old != open_impacts_.end() && old->pair < std::array<Index, 2>{a, b}) ++old;
-    const bool was_open = old != open_impacts_.end() && old->pair == std::array<Index, 2>{a, b};
-    if (!touches) continue;  // apart: its event (if any) closes
-    if (was_open) {
-      OpenImpact e = *old;
-      ++e.steps;
-      if (!e.analysed) {
-        e.points.insert(e.points.end(), points.begin(), points.end());
-        e.approach = std::max(e.approach, approach);
-      }
-      e.pair = {a, b};
-      next.push_back(std::move(e));
-    } else {
-      const double threshold = std::min(settings_of(ba).min_approach_speed, settings_of(bb).min_approach_speed);
-      if (approach < threshold || (!analysable(ba) && !analysable(bb))) continue;
-      next.push_back({.pair = {a, b}, .steps = 0, .analysed = false, .approach = approach, .points = points});
     }
     // Ready once the pair no longer closes (the solver resolved the collision), or after a few
     // steps whatever happens.
-    OpenImpact& e = next.back();
-    if (!e.analysed && (still_closing <= 0.1 * e.approach || e.steps >= kMaxImpactSteps)) {
+    if (still_closing <= 0.1 * e.approach || e.steps >= kMaxImpactSteps) {
       e.analysed = true;
       ready.push_back(next.size() - 1);
     }
@@ -836,17 +839,11 @@ void World::process_impacts() {
   }
   for (std::size_t k = 0; k < analyse.size(); ++k) {
     const auto [id, other_id] = analyse[k];
-    Body& body = bodies_[id];
-    ImpactSettings settings = settings_of(body);
+    const Body& body = bodies_[id];
     const Body& other = bodies_[other_id];
-    settings.other_material = other.model ? other.model->fem.material : settings_.obstacle_material;
+    ImpactSettings settings = impact_settings(body, other.model ? &other.model->fem.material : nullptr);
     settings.restitution = restitution_of[k];
-    if (body_count() >= settings_.max_bodies) settings.fracture.crack.max_cracks = 0;
-    settings.min_fragment_mass = std::max(settings.min_fragment_mass, settings.min_fragment_fraction * body.root_mass);
-    BodyState state;
-    state.rigid = body.rigid;
-    state.plastic_strain = body.plastic_strain;
-    state.solver = body.solver;
+    BodyState state = impact_state(body);
     auto result = analyze_impact(*body.model, state, contacts_of[k], settings);
     if (!result)
       log_warning("world: the impact analysis of body " + std::to_string(id) + " failed: " + result.error().message);
@@ -856,6 +853,26 @@ void World::process_impacts() {
   }
   for (OpenImpact& e : open_impacts_)
     if (e.analysed) e.points.clear();
+  forget_removed();
+}
+
+ImpactSettings World::impact_settings(const Body& body, const Material* other) const {
+  ImpactSettings settings = body.impact ? *body.impact : settings_.impact;
+  settings.other_material = other ? *other : settings_.obstacle_material;
+  if (body_count() >= settings_.max_bodies) settings.fracture.crack.max_cracks = 0;
+  settings.min_fragment_mass = std::max(settings.min_fragment_mass, settings.min_fragment_fraction * body.root_mass);
+  return settings;
+}
+
+BodyState World::impact_state(const Body& body) {
+  BodyState state;
+  state.rigid = body.rigid;
+  state.plastic_strain = body.plastic_strain;
+  state.solver = body.solver;
+  return state;
+}
+
+void World::forget_removed() {
   std::erase_if(contacts_, [&](const Contact& c) { return bodies_[c.body_a].removed || bodies_[c.body_b].removed; });
   std::erase_if(open_impacts_,
                 [&](const OpenImpact& e) { return bodies_[e.pair[0]].removed || bodies_[e.pair[1]].removed; });
@@ -1012,14 +1029,8 @@ void World::process_tools() {
     const bool analysable = b.type == BodyType::dynamic && b.model && b.breakable;
     if (analysable) {
       const Vec3 point = b.rigid.position + b.rigid.orientation * t.local_point;
-      ImpactSettings settings = b.impact ? *b.impact : settings_.impact;
-      settings.other_material = settings_.obstacle_material;
-      if (body_count() >= settings_.max_bodies) settings.fracture.crack.max_cracks = 0;
-      settings.min_fragment_mass = std::max(settings.min_fragment_mass, settings.min_fragment_fraction * b.root_mass);
-      BodyState state;
-      state.rigid = b.rigid;
-      state.plastic_strain = b.plastic_strain;
-      state.solver = b.solver;
+      ImpactSettings settings = impact_settings(b, nullptr);
+      BodyState state = impact_state(b);
       Result<ImpactResult> result = ImpactResult{};
       if (t.strike) {
         settings.min_approach_speed = 0;
@@ -1043,9 +1054,7 @@ void World::process_tools() {
     t.remaining -= settings_.time_step;
     if (!t.strike && t.remaining > 0.5 * settings_.time_step && !bodies_[t.body].removed) tools_.push_back(t);
   }
-  std::erase_if(contacts_, [&](const Contact& c) { return bodies_[c.body_a].removed || bodies_[c.body_b].removed; });
-  std::erase_if(open_impacts_,
-                [&](const OpenImpact& e) { return bodies_[e.pair[0]].removed || bodies_[e.pair[1]].removed; });
+  forget_removed();
 }
 
 void World::step() {
