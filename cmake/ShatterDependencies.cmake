@@ -11,6 +11,17 @@ if(SHATTER_BUILD_APPS OR SHATTER_BUILD_TESTS)
   find_package(CLI11 REQUIRED)
   find_package(fmt REQUIRED)
 endif()
+if(SHATTER_BUILD_RENDER)
+  pkg_check_modules(EPOXY REQUIRED IMPORTED_TARGET epoxy)  # libepoxy-dev: GL and EGL entry points
+else()
+  set(SHATTER_BUILD_VIEWER OFF)
+endif()
+if(SHATTER_BUILD_VIEWER)
+  pkg_check_modules(GLFW REQUIRED IMPORTED_TARGET glfw3)  # libglfw3-dev
+  # libimgui-dev: the library with its GLFW and OpenGL 3 back ends (its .pc names stb, which
+  # libstb-dev provides).
+  pkg_check_modules(IMGUI REQUIRED IMPORTED_TARGET imgui)
+endif()
 if(SHATTER_BUILD_TESTS)
   find_package(GTest REQUIRED)
 endif()

@@ -35,21 +35,8 @@ std::atomic<bool> g_stop{false};
 
 extern "C" void on_interrupt(int /*signal*/) { g_stop.store(true); }
 
-// The bundled vase drop: scenes/vase_drop.json in the current folder, or beside the source tree
-// the program was built in, or in an installed share/shatter.
-std::string default_scene() {
-  std::vector<std::filesystem::path> candidates = {"scenes/vase_drop.json",
-                                                   std::filesystem::path(SHATTER_SOURCE_DIR) / "scenes/vase_drop.json"};
-  std::error_code ec;
-  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  if (!ec) candidates.push_back(exe.parent_path() / "../share/shatter/scenes/vase_drop.json");
-  for (const auto& c : candidates)
-    if (std::filesystem::is_regular_file(c, ec)) return c.lexically_normal().string();
-  return "scenes/vase_drop.json";
-}
-
 int run(const RunArgs& args) {
-  const std::string path = args.scene.empty() ? default_scene() : args.scene;
+  const std::string path = args.scene.empty() ? default_scene_path() : args.scene;
   auto scene = read_scene(path);
   if (!scene) return report_error(scene.error().to_string(), kExitBadInput);
   if (args.threads > 1024) return report_error("--threads: expected at most 1024", kExitUsage);

@@ -29,4 +29,9 @@ struct Registration {
 /// Print an error message on stderr ("shatter: error: ..."). Returns `code` for convenience.
 int report_error(const std::string& message, int code);
 
+/// The bundled vase drop: scenes/vase_drop.json in the current folder, beside the source tree the
+/// program was built from, or in an installed share/shatter (`run`, `render` and `view` without a
+/// scene).
+std::string default_scene_path();
+
 }  // namespace shatter::cli

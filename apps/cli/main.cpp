@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,19 @@ std::vector<Entry>& registry() {
 
 Registration::Registration(const char* name, const char* description, SetupFn setup) {
   registry().push_back({name, description, setup});
+}
+
+// The bundled vase drop: scenes/vase_drop.json in the current folder, or beside the source tree
+// the program was built in, or in an installed share/shatter.
+std::string default_scene_path() {
+  std::vector<std::filesystem::path> candidates = {"scenes/vase_drop.json",
+                                                   std::filesystem::path(SHATTER_SOURCE_DIR) / "scenes/vase_drop.json"};
+  std::error_code ec;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) candidates.push_back(exe.parent_path() / "../share/shatter/scenes/vase_drop.json");
+  for (const auto& c : candidates)
+    if (std::filesystem::is_regular_file(c, ec)) return c.lexically_normal().string();
+  return "scenes/vase_drop.json";
 }
 
 int report_error(const std::string& message, int code) {

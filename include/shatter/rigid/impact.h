@@ -130,6 +130,9 @@ struct ImpactResult {
   StaticReport solve;               ///< the static solve
   double max_principal_stress = 0;  ///< largest principal stress over the tets, Pa
   double max_von_mises = 0;         ///< largest von Mises stress, Pa
+  /// Signed display stress of each parent tet under the load (TetStress::display, Pa, #tets):
+  /// tension positive, for the stress view (empty when nothing was solved).
+  std::vector<double> display_stress;
   bool dented = false;              ///< plasticity changed the rest shape
   std::vector<CrackEvent> cracks;   ///< cracks cut, in order
   /// Empty: the body is unchanged (maybe with more plastic strain, see plastic_strain). One: the

@@ -99,6 +99,11 @@ struct SceneWorld {
 /// Errors name the body and its file.
 Result<SceneWorld> build_scene(const Scene& scene);
 
+/// Apply the scene's actions due by the end of the next step, from `next_action` on (it moves past
+/// them): run_scene, `shatter render` and the viewer step a scene this way. An action on a body
+/// that broke before is skipped. Errors: an action the world refuses (names the action's time).
+Result<void> apply_due_actions(const Scene& scene, const SceneWorld& built, std::size_t& next_action);
+
 /// Settings of run_scene.
 struct RunOptions {
   std::string out_dir;                      ///< where the outputs go ("": none)

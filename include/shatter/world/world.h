@@ -242,6 +242,11 @@ class World {
   [[nodiscard]] const BodyModel* model(BodyId id) const { return body(id).model.get(); }
   /// The convex pieces of a body (body frame).
   [[nodiscard]] std::span<const ConvexHull> pieces(BodyId id) const;
+  /// The plane of a plane body (world), null for other bodies.
+  [[nodiscard]] const Plane* plane(BodyId id) const {
+    const Body& b = body(id);
+    return b.shape && b.shape->is_plane ? &b.shape->plane : nullptr;
+  }
   [[nodiscard]] bool awake(BodyId id) const { return body(id).awake; }
   /// Set pose and velocities (wakes the body). Errors: an invalid or removed id, a non-finite
   /// state.
@@ -270,6 +275,10 @@ class World {
   [[nodiscard]] BodyId parent(BodyId id) const;
   /// Accumulated plastic strain per tet of the body's current model (empty for planes and hulls).
   [[nodiscard]] std::span<const double> plastic_strain(BodyId id) const { return body(id).plastic_strain; }
+  /// Signed display stress per tet of the body's current model under its last impact or tool load
+  /// (Pa; tension positive, compression negative: the paper's Fig. 7), carried into fragments;
+  /// empty until the body is first analysed. For display only: it is not part of the state hash.
+  [[nodiscard]] std::span<const double> display_stress(BodyId id) const { return body(id).display_stress; }
   /// The body's boundary surface at its pose: world positions, triangles, crack flags and rest
   /// coordinates for solid textures (empty for planes and hulls).
   [[nodiscard]] BodySurface surface(BodyId id) const;
@@ -340,6 +349,7 @@ class World {
     std::uint32_t generation = 0;
     std::shared_ptr<const ImpactSettings> impact;
     std::vector<double> plastic_strain;    ///< per tet of model
+    std::vector<double> display_stress;    ///< per tet of model under the last load, Pa (display only)
     std::shared_ptr<StaticSolver> solver;  ///< kept between impacts
   };
   struct PairRef {

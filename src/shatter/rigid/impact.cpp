@@ -273,6 +273,8 @@ Result<void> respond(const BodyModel& model, BodyState& state, const std::vector
   // Stresses, then plasticity and cracks only where a limit is passed.
   t0 = Clock::now();
   std::vector<TetStress> stress = compute_stresses(model.fem, x);
+  result.display_stress.resize(stress.size());
+  for (std::size_t e = 0; e < stress.size(); ++e) result.display_stress[e] = stress[e].display;
   for (const TetStress& s : stress) {
     result.max_principal_stress = std::max(result.max_principal_stress, s.principal[0]);
     result.max_von_mises = std::max(result.max_von_mises, s.von_mises);

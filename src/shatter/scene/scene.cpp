@@ -504,7 +504,8 @@ namespace {
 // slot and the plastic strain per tet and the rest (material) coordinates per node.
 Result<void> write_frame(const std::string& path, const World& w) {
   TetMesh mesh;
-  MeshField body{"body", 1, {}}, parent{"parent", 1, {}}, plastic{"plastic_strain", 1, {}}, rest{"rest", 3, {}};
+  MeshField body{"body", 1, {}}, parent{"parent", 1, {}}, plastic{"plastic_strain", 1, {}}, rest{"rest", 3, {}},
+      stress{"display_stress", 1, {}};
   for (Index slot = 0; slot < w.body_count(); ++slot) {
     const BodyId id = w.body_id(slot);
     const BodyModel* m = w.model(id);
@@ -518,17 +519,19 @@ Result<void> write_frame(const std::string& path, const World& w) {
       rest.values.insert(rest.values.end(), {q.x(), q.y(), q.z()});
     }
     const std::span<const double> strain = w.plastic_strain(id);
+    const std::span<const double> display = w.display_stress(id);
     for (std::size_t e = 0; e < m->mesh.tets.size(); ++e) {
       const TetIndices& t = m->mesh.tets[e];
       mesh.tets.push_back({t[0] + base, t[1] + base, t[2] + base, t[3] + base});
       body.values.push_back(static_cast<double>(slot));
       parent.values.push_back(static_cast<double>(w.parent(id).index));
       plastic.values.push_back(e < strain.size() ? strain[e] : 0.0);
+      stress.values.push_back(e < display.size() ? display[e] : 0.0);
     }
   }
   MeshWriteOptions options;
   options.binary = true;
-  options.fields.tet_fields = {std::move(body), std::move(parent), std::move(plastic)};
+  options.fields.tet_fields = {std::move(body), std::move(parent), std::move(plastic), std::move(stress)};
   options.fields.node_fields = {std::move(rest)};
   return write_mesh(path, mesh, options);
 }
@@ -613,6 +616,35 @@ std::string hex64(std::uint64_t v) {
 
 }  // namespace
 
+Result<void> apply_due_actions(const Scene& scene, const SceneWorld& built, std::size_t& next_action) {
+  World& w = *built.world;
+  const double dt = w.settings().time_step;
+  while (next_action < scene.actions.size() && scene.actions[next_action].time < w.time() + 0.5 * dt) {
+    const SceneAction& a = scene.actions[next_action++];
+    const BodyId id = built.bodies[a.body];
+    if (w.removed(id)) continue;  // it broke before: the action has nothing to act on
+    Vec3 point = a.point;
+    if (!a.point_given) {  // the surface point the vector first meets
+      const BodySurface surf = w.surface(id);
+      const Vec3 dir = a.vector.normalized();
+      double best = std::numeric_limits<double>::infinity();
+      for (const Vec3& p : surf.positions)
+        if (p.dot(dir) < best) {
+          best = p.dot(dir);
+          point = p;
+        }
+    }
+    Result<void> done;
+    switch (a.kind) {
+      case SceneAction::Kind::strike: done = w.strike(id, point, a.vector, a.speed); break;
+      case SceneAction::Kind::press: done = w.press(id, point, a.vector, a.radius, a.duration); break;
+      case SceneAction::Kind::impulse: done = w.apply_impulse(id, a.vector, point); break;
+    }
+    if (!done) return make_error(scene.file + ": action at " + Json(a.time).dump() + " s: " + done.error().message);
+  }
+  return {};
+}
+
 Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
   const auto t_start = Clock::now();
   SHATTER_TRY(built, build_scene(scene));
@@ -678,30 +710,7 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
       s.stopped = true;
       break;
     }
-    // Actions due by the end of this step.
-    while (next_action < scene.actions.size() && scene.actions[next_action].time < w.time() + 0.5 * dt) {
-      const SceneAction& a = scene.actions[next_action++];
-      const BodyId id = built->bodies[a.body];
-      if (w.removed(id)) continue;  // it broke before: the action has nothing to act on
-      Vec3 point = a.point;
-      if (!a.point_given) {  // the surface point the vector first meets
-        const BodySurface surf = w.surface(id);
-        const Vec3 dir = a.vector.normalized();
-        double best = std::numeric_limits<double>::infinity();
-        for (const Vec3& p : surf.positions)
-          if (p.dot(dir) < best) {
-            best = p.dot(dir);
-            point = p;
-          }
-      }
-      Result<void> done;
-      switch (a.kind) {
-        case SceneAction::Kind::strike: done = w.strike(id, point, a.vector, a.speed); break;
-        case SceneAction::Kind::press: done = w.press(id, point, a.vector, a.radius, a.duration); break;
-        case SceneAction::Kind::impulse: done = w.apply_impulse(id, a.vector, point); break;
-      }
-      if (!done) return make_error(scene.file + ": action at " + Json(a.time).dump() + " s: " + done.error().message);
-    }
+    SHATTER_TRY(acted, apply_due_actions(scene, *built, next_action));
     w.step();
     ++s.steps;
     const StepStats& st = w.stats();

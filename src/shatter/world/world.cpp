@@ -907,8 +907,17 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
                                 .radius = c.plan.radius,
                                 .stress = c.plan.stress});
   }
+  // The stress view of a piece: its tets show the stress of the parent tets they came from.
+  auto child_stress = [&](const ImpactChild& child) {
+    std::vector<double> out;
+    if (r.display_stress.empty()) return out;
+    out.reserve(child.parent_tet.size());
+    for (const Index e : child.parent_tet) out.push_back(r.display_stress[static_cast<std::size_t>(e)]);
+    return out;
+  };
   if (r.children.empty() && r.cracks.empty()) {
     bodies_[id].plastic_strain = std::move(r.plastic_strain);
+    bodies_[id].display_stress = std::move(r.display_stress);
     events_.impacts.push_back(rec);
     return;
   }
@@ -925,6 +934,7 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
       body.inertia = rigid_inertia(child.model->mass);
       body.rigid = child.rigid;
       body.plastic_strain = std::move(child.plastic_strain);
+      body.display_stress = child_stress(child);
     } else {  // keep the body as it was: nothing was removed
       log_warning("world: body " + std::to_string(id) + " keeps its shape: " + shape.error().message);
       rec.dented = false;
@@ -961,6 +971,7 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
     b.parent = id;
     b.root_mass = parent.root_mass;
     b.plastic_strain = std::move(child.plastic_strain);
+    b.display_stress = child_stress(child);
     born.push_back(cid);
     events_.fragments.push_back({.parent = body_id(id), .body = body_id(cid), .mass = mass});
   }
