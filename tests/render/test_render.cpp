@@ -344,3 +344,83 @@ TEST(CmdRender, WritesFramesAndRefusesBadArguments) {
 
 }  // namespace
 }  // namespace shatter::render
+
+namespace shatter::render {
+namespace {
+
+bool have_xvfb() { return test::run_command("command -v xvfb-run >/dev/null 2>&1").status == 0; }
+
+TEST(CmdView, AHammerBlowThroughTheToolPathBreaksTheVase) {
+  SHATTER_REQUIRE_TOOL(!test::cli_path().empty(), "the shatter CLI");
+  SHATTER_REQUIRE_TOOL(have_xvfb(), "xvfb-run (package xvfb)");
+  test::TempDir dir;
+  // Paused in the air, the hammer tool is chosen and the vase clicked (the mouse's path: pick,
+  // then World::strike), then it plays on; a screenshot, and the bodies are counted.
+  const std::string script = dir.file("script.json");
+  {
+    std::ofstream out(script);
+    out << R"([
+      {"frame": 0, "action": "pause"},
+      {"frame": 1, "action": "tool", "tool": "hammer", "impulse": 5, "speed": 10},
+      {"frame": 2, "action": "click", "body": "vase"},
+      {"frame": 2, "action": "play"},
+      {"frame": 8, "action": "expect_bodies_at_least", "count": 2},
+      {"frame": 8, "action": "screenshot", "path": ")"
+        << dir.file("shot.png") << R"("},
+      {"frame": 9, "action": "quit"}
+    ])";
+  }
+  const std::string scene = std::string(SHATTER_SOURCE_DIR) + "/scenes/vase_drop.json";
+  auto r = test::run_command("xvfb-run -a -s '-screen 0 1024x768x24' " + test::cli_path() + " view " + scene +
+                                 " --size 960x540 --fixed-step --no-vsync --script " + script,
+                             true);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("screenshot"), std::string::npos) << r.output;
+  int bodies = 0;
+  const auto at = r.output.find("bodies ");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  bodies = std::atoi(r.output.c_str() + at + 7);
+  EXPECT_GE(bodies, 2) << r.output;
+  auto shot = read_png(dir.file("shot.png"));
+  ASSERT_OK(shot);
+  EXPECT_EQ(shot->width, 960);
+  EXPECT_EQ(shot->height, 540);
+  // Beside the panels (top left, bottom right) the picture shows the dark ground and the pieces
+  // of the white glazed vase.
+  int bright = 0, dark = 0;
+  for (int y = 0; y < 390; ++y)
+    for (int x = 420; x < 960; ++x) {
+      const std::uint8_t* p = shot->pixel(x, y);
+      bright += p[0] > 190 && p[1] > 190 && p[2] > 190 ? 1 : 0;
+      dark += p[0] < 140 && p[1] < 140 && p[2] < 140 ? 1 : 0;
+    }
+  EXPECT_GT(bright, 300);
+  EXPECT_GT(dark, 390 * 540 / 3);
+}
+
+TEST(CmdView, WithoutADisplayItSaysSoAndPointsToRender) {
+  SHATTER_REQUIRE_TOOL(!test::cli_path().empty(), "the shatter CLI");
+  auto r = test::run_command("env -u DISPLAY -u WAYLAND_DISPLAY " + test::cli_path() + " view " +
+                                 std::string(SHATTER_SOURCE_DIR) + "/scenes/vase_drop.json",
+                             true);
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("shatter render"), std::string::npos) << r.output;
+}
+
+TEST(CmdView, RefusesABadScript) {
+  SHATTER_REQUIRE_TOOL(!test::cli_path().empty(), "the shatter CLI");
+  SHATTER_REQUIRE_TOOL(have_xvfb(), "xvfb-run (package xvfb)");
+  test::TempDir dir;
+  {
+    std::ofstream out(dir.file("bad.json"));
+    out << R"([{"frame": 1, "action": "explode"}])";
+  }
+  auto r = test::run_command("xvfb-run -a " + test::cli_path() + " view " + std::string(SHATTER_SOURCE_DIR) +
+                                 "/scenes/vase_drop.json --size 320x240 --script " + dir.file("bad.json"),
+                             true);
+  EXPECT_EQ(r.status, 3) << r.output;
+  EXPECT_NE(r.output.find("unknown action \"explode\""), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace shatter::render
