@@ -21,6 +21,10 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev python3 python3-meshio calculix-ccx
   # benchmark peer for the rigid world (linked into bench/ only)
   libbullet-dev
+  # renderer and viewer (shatter render / shatter view): OpenGL through libepoxy, headless through
+  # EGL with Mesa's software rasterizer (llvmpipe: no GPU needed), windows with GLFW, Dear ImGui
+  # (with its GLFW and OpenGL 3 back ends); Xvfb for the viewer's tests
+  libepoxy-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev libimgui-dev xvfb xauth
 )
 for arg in "$@"; do
   case "$arg" in

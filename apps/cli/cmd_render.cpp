@@ -1,8 +1,8 @@
 // `shatter render [SCENE] --out DIR [--time T] [--fps F] [--size WxH] [--view material|stress] ...`:
 // simulate a scene and render it without a window (EGL; Mesa's llvmpipe needs no GPU) to PNG
 // frames, and to an MP4 when ffmpeg is installed (docs/viewer.md).
-#include <fmt/format.h>
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -65,6 +65,7 @@ std::string find_program(const std::string& name) {
 // Run a program with arguments (no shell), its output discarded; its exit status.
 int run_program(const std::vector<std::string>& argv) {
   std::vector<char*> args;
+  args.reserve(argv.size() + 1);
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
   posix_spawn_file_actions_t actions;
@@ -174,9 +175,8 @@ int render(const RenderArgs& args) {
     const auto now = std::chrono::steady_clock::now();
     if (std::chrono::duration<double>(now - last_print).count() >= (tty ? 0.1 : 5.0) || steps == total_steps) {
       last_print = now;
-      const std::string line =
-          fmt::format("t {:.2f} / {:.2f} s, {} frames, {} bodies", w.time(), duration, frame_index,
-                      w.live_body_count() - (scene->ground ? 1 : 0));
+      const std::string line = fmt::format("t {:.2f} / {:.2f} s, {} frames, {} bodies", w.time(), duration, frame_index,
+                                           w.live_body_count() - (scene->ground ? 1 : 0));
       if (tty)
         std::fprintf(stderr, "\r%-70s%s", line.c_str(), steps == total_steps ? "\n" : "");
       else
@@ -242,8 +242,7 @@ RunFn setup_render(CLI::App& sub) {
   sub.add_option("--view", args->view, "material (default) or stress (tension red, compression green)");
   sub.add_option("--stress-scale", args->stress_scale, "Stress of full colour, Pa (default: the frame's largest)")
       ->check(CLI::NonNegativeNumber);
-  sub.add_option("--camera", args->camera, "YAW,PITCH in degrees [,DISTANCE in m] (default: framed)")
-      ->delimiter(',');
+  sub.add_option("--camera", args->camera, "YAW,PITCH in degrees [,DISTANCE in m] (default: framed)")->delimiter(',');
   sub.add_flag("--no-mp4", args->no_mp4, "Do not make render.mp4 even when ffmpeg is installed");
   sub.add_flag("--no-marks", args->no_marks, "Do not mark impact points and crack planes");
   sub.add_option("--threads", args->threads, "Simulation threads (results are the same on any number)")

@@ -42,8 +42,7 @@ RunFn setup_view(CLI::App& sub) {
   return [args] { return view(*args); };
 }
 
-const Registration reg{"view", "Open a scene in the interactive viewer (tools, stress view, recording)",
-                       &setup_view};
+const Registration reg{"view", "Open a scene in the interactive viewer (tools, stress view, recording)", &setup_view};
 
 }  // namespace
 }  // namespace shatter::cli

@@ -3,10 +3,10 @@
 #include <epoxy/gl.h>
 // GLFW after epoxy: epoxy provides the GL declarations.
 #include <GLFW/glfw3.h>
-#include <fmt/format.h>
-#include <imgui.h>
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_opengl3.h>
+#include <fmt/format.h>
+#include <imgui.h>
 
 #include <nlohmann/json.hpp>
 
@@ -50,6 +50,7 @@ struct ScriptStep {
   int frame = 0;
   std::string action;  // tool, click, screenshot, view, play, pause, step, reset, quit, expect_bodies_at_least
   Json args;
+  std::size_t order = 0;
 };
 
 Result<std::vector<ScriptStep>> read_script(const std::string& path) {
@@ -63,7 +64,7 @@ Result<std::vector<ScriptStep>> read_script(const std::string& path) {
   }
   if (!j.is_array()) return make_error(path + ": expected an array of steps");
   std::vector<ScriptStep> steps;
-  const std::vector<std::string> known = {"tool",  "click", "screenshot", "view",  "play",
+  const std::vector<std::string> known = {"tool",  "click", "screenshot", "view", "play",
                                           "pause", "step",  "reset",      "quit", "expect_bodies_at_least"};
   for (std::size_t i = 0; i < j.size(); ++i) {
     const Json& s = j[i];
@@ -71,12 +72,15 @@ Result<std::vector<ScriptStep>> read_script(const std::string& path) {
     if (!s.is_object() || !s.contains("frame") || !s["frame"].is_number_integer() || !s.contains("action") ||
         !s["action"].is_string())
       return make_error(where + ": expected {\"frame\": <integer>, \"action\": <name>, ...}");
-    ScriptStep st{s["frame"].get<int>(), s["action"].get<std::string>(), s};
+    ScriptStep st{s["frame"].get<int>(), s["action"].get<std::string>(), s, 0};
     if (std::find(known.begin(), known.end(), st.action) == known.end())
       return make_error(where + ".action: unknown action \"" + st.action + "\"");
     steps.push_back(std::move(st));
   }
-  std::stable_sort(steps.begin(), steps.end(), [](const auto& a, const auto& b) { return a.frame < b.frame; });
+  // By frame, in file order within a frame.
+  for (std::size_t i = 0; i < steps.size(); ++i) steps[i].order = i;
+  std::sort(steps.begin(), steps.end(),
+            [](const auto& a, const auto& b) { return a.frame != b.frame ? a.frame < b.frame : a.order < b.order; });
   return steps;
 }
 
@@ -175,7 +179,8 @@ Viewer::~Viewer() {
     ImGui::DestroyContext();
     glfwDestroyWindow(window_);
   }
-  glfwTerminate();
+  // No glfwTerminate: it unloads the OpenGL driver, whose remaining allocations then show up as
+  // leaks; the process ends right after anyway.
 }
 
 void Viewer::log(const std::string& line) {
@@ -207,8 +212,8 @@ bool Viewer::load_scene(const std::string& path) {
     const std::filesystem::path mesh = dir / ".." / "assets" / "meshes" / (std::string(name) + ".msh");
     if (std::filesystem::is_regular_file(mesh, ec)) assets_.emplace_back(mesh.lexically_normal().string(), nullptr);
   }
-  camera_ = render::frame_camera(render::frame_from_world(*built_->world),
-                                 static_cast<double>(opt_.width) / opt_.height);
+  camera_ =
+      render::frame_camera(render::frame_from_world(*built_->world), static_cast<double>(opt_.width) / opt_.height);
   return true;
 }
 
@@ -281,9 +286,8 @@ void Viewer::log_events() {
   const World& w = *built_->world;
   const StepEvents& ev = w.events();
   for (const ImpactRecord& r : ev.impacts)
-    log(fmt::format("{:.3f} s  impact body {} ({:.1f} m/s, {:.3g} N): {}{}{}", w.time(), r.body.index,
-                    r.approach_speed, r.force, r.dented ? "dented " : "",
-                    r.cracks ? fmt::format("{} crack(s) ", r.cracks) : "",
+    log(fmt::format("{:.3f} s  impact body {} ({:.1f} m/s, {:.3g} N): {}{}{}", w.time(), r.body.index, r.approach_speed,
+                    r.force, r.dented ? "dented " : "", r.cracks ? fmt::format("{} crack(s) ", r.cracks) : "",
                     r.fragments ? fmt::format("-> {} fragments", r.fragments) : ""));
   if (!ev.fragments.empty()) log(fmt::format("{:.3f} s  {} fragment(s) born", w.time(), ev.fragments.size()));
 }
@@ -441,7 +445,8 @@ void Viewer::handle_mouse() {
       render_options_.view =
           render_options_.view == render::ViewMode::stress ? render::ViewMode::material : render::ViewMode::stress;
     if (ImGui::IsKeyPressed('S') && !playing_) step_once();
-    if (ImGui::IsKeyPressed('P')) screenshot(fmt::format("{}/screenshot_{:03d}.png", opt_.out_dir, screenshot_count_++));
+    if (ImGui::IsKeyPressed('P'))
+      screenshot(fmt::format("{}/screenshot_{:03d}.png", opt_.out_dir, screenshot_count_++));
     for (int k = 0; k < 4; ++k)
       if (ImGui::IsKeyPressed('1' + k)) tool_ = static_cast<Tool>(k);
   }
@@ -548,10 +553,11 @@ void Viewer::ui() {
   // Selection: its material (for the scene's own bodies: edit and restart).
   if (selected_.index >= 0 && w.valid(selected_) && w.model(selected_)) {
     ImGui::Separator();
-  ImGui::TextDisabled("selected");
+    ImGui::TextDisabled("selected");
     const BodyModel& m = *w.model(selected_);
-    ImGui::Text("body %d: %d tets, %.3g kg%s", selected_.index, static_cast<int>(m.mesh.num_tets()), m.mass.mass,
-                w.parent(selected_).index >= 0 ? fmt::format(" (from body {})", w.parent(selected_).index).c_str() : "");
+    ImGui::Text(
+        "body %d: %d tets, %.3g kg%s", selected_.index, static_cast<int>(m.mesh.num_tets()), m.mass.mass,
+        w.parent(selected_).index >= 0 ? fmt::format(" (from body {})", w.parent(selected_).index).c_str() : "");
     const auto it = std::find(built_->bodies.begin(), built_->bodies.end(), selected_);
     if (it != built_->bodies.end()) {
       Material& mat = scene_.bodies[static_cast<std::size_t>(it - built_->bodies.begin())].material;
@@ -667,8 +673,8 @@ void Viewer::run_script() {
       if (!screenshot(s.args.value("path", fmt::format("{}/screenshot_{:03d}.png", opt_.out_dir, screenshot_count_++))))
         exit_code_ = 4;
     } else if (s.action == "view") {
-      render_options_.view = s.args.value("view", "material") == "stress" ? render::ViewMode::stress
-                                                                           : render::ViewMode::material;
+      render_options_.view =
+          s.args.value("view", "material") == "stress" ? render::ViewMode::stress : render::ViewMode::material;
     } else if (s.action == "play") {
       playing_ = true;
     } else if (s.action == "pause") {
@@ -768,8 +774,7 @@ int Viewer::run() {
     glfwGetFramebufferSize(window_, &fbw, &fbh);
     const auto d0 = Clock::now();
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    renderer_->draw(render::frame_from_world(*built_->world, &marks_, selected_), camera_, fbw, fbh,
-                    render_options_);
+    renderer_->draw(render::frame_from_world(*built_->world, &marks_, selected_), camera_, fbw, fbh, render_options_);
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
     draw_ms_ = std::chrono::duration<double, std::milli>(Clock::now() - d0).count();
     glfwSwapBuffers(window_);

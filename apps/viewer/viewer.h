@@ -9,12 +9,12 @@
 namespace shatter::viewer {
 
 struct ViewerOptions {
-  std::string scene;        ///< scene file
-  std::string script;       ///< JSON script of tool actions and screenshots ("" for none; docs/viewer.md)
+  std::string scene;          ///< scene file
+  std::string script;         ///< JSON script of tool actions and screenshots ("" for none; docs/viewer.md)
   std::string out_dir = ".";  ///< where screenshots go
   int width = 1280;
   int height = 720;
-  int frames = -1;      ///< quit after this many frames (-1: when the window closes)
+  int frames = -1;          ///< quit after this many frames (-1: when the window closes)
   bool fixed_step = false;  ///< one simulation step per frame (scripts, frame-rate runs), not real time
   bool vsync = true;
   /// Multisampling of the window (0: none; 4 halves the frame rate of a software rasterizer).

@@ -196,9 +196,10 @@ TEST(Render, TheVaseIsWhereTheWorldSaysAtEachFrame) {
     cx /= n;
     cy /= n;
     const Vec3 com = camera.project(w.rigid_state(vase).position, kW, kH);
-    std::printf("t %.1f: vase box %.0f..%.0f x %.0f..%.0f px, changed centroid (%.1f, %.1f), centre of mass (%.1f, %.1f),"
-                " %.0f%% of the box covered\n",
-                t, x0, x1, y0, y1, cx, cy, com.x(), com.y(), 100.0 * changed_in_box / inside);
+    std::printf(
+        "t %.1f: vase box %.0f..%.0f x %.0f..%.0f px, changed centroid (%.1f, %.1f), centre of mass (%.1f, %.1f),"
+        " %.0f%% of the box covered\n",
+        t, x0, x1, y0, y1, cx, cy, com.x(), com.y(), 100.0 * changed_in_box / inside);
     // The drawn vase fills much of its projected box (a tilted vase's silhouette), and its pixels
     // centre near its projected centre of mass.
     EXPECT_GT(static_cast<double>(changed_in_box) / inside, 0.4);
@@ -261,11 +262,15 @@ TEST(Render, StressViewIsRedInTensionAndGreenInCompression) {
     const std::uint8_t* p = img.pixel(static_cast<int>(px.x()), static_cast<int>(px.y()));
     // Lighting dims the colours: compare channels by ratio.
     if (s > 0) {
-      if (p[0] > 1.25 * p[1] && p[0] > 1.25 * p[2]) ++red;
-      else ++wrong;
+      if (p[0] > 1.25 * p[1] && p[0] > 1.25 * p[2])
+        ++red;
+      else
+        ++wrong;
     } else {
-      if (p[1] > 1.25 * p[0] && p[1] > 1.25 * p[2]) ++green;
-      else ++wrong;
+      if (p[1] > 1.25 * p[0] && p[1] > 1.25 * p[2])
+        ++green;
+      else
+        ++wrong;
     }
   }
   std::printf("stress view: %d red (tension), %d green (compression), %d wrong; scale %.3g Pa\n", red, green, wrong,
@@ -326,7 +331,8 @@ TEST(CmdRender, WritesFramesAndRefusesBadArguments) {
   TempDir dir;
   const std::string cli = cli_path();
   const std::string scene = std::string(SHATTER_SOURCE_DIR) + "/scenes/vase_drop.json";
-  auto r = run_command(cli + " render " + scene + " --out " + dir.path().string() + " --time 0.2 --fps 10 --size 64x48 --no-mp4 --json");
+  auto r = run_command(cli + " render " + scene + " --out " + dir.path().string() +
+                       " --time 0.2 --fps 10 --size 64x48 --no-mp4 --json");
   ASSERT_EQ(r.status, 0) << r.output;
   for (int k = 0; k <= 2; ++k) {
     auto img = read_png(dir.path().string() + "/frame_00000" + std::to_string(k) + ".png");

@@ -133,8 +133,8 @@ struct ImpactResult {
   /// Signed display stress of each parent tet under the load (TetStress::display, Pa, #tets):
   /// tension positive, for the stress view (empty when nothing was solved).
   std::vector<double> display_stress;
-  bool dented = false;              ///< plasticity changed the rest shape
-  std::vector<CrackEvent> cracks;   ///< cracks cut, in order
+  bool dented = false;             ///< plasticity changed the rest shape
+  std::vector<CrackEvent> cracks;  ///< cracks cut, in order
   /// Empty: the body is unchanged (maybe with more plastic strain, see plastic_strain). One: the
   /// body goes on with a new model (dented or cracked but whole). More: it broke into these.
   std::vector<ImpactChild> children;

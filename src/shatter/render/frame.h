@@ -47,10 +47,10 @@ struct DrawBody {
 struct EventMark {
   enum class Kind : std::uint8_t { impact, crack };
   Kind kind = Kind::impact;
-  double time = 0;               ///< s
-  Vec3 point = Vec3::Zero();     ///< impact point or crack origin, world, m
-  Vec3 normal = Vec3::UnitY();   ///< crack plane normal
-  double radius = 0;             ///< crack radius, m
+  double time = 0;              ///< s
+  Vec3 point = Vec3::Zero();    ///< impact point or crack origin, world, m
+  Vec3 normal = Vec3::UnitY();  ///< crack plane normal
+  double radius = 0;            ///< crack radius, m
 };
 
 /// Marks of the events of the last `keep` seconds.

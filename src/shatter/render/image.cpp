@@ -59,7 +59,8 @@ std::string encode_png(const Image& image, bool alpha) {
     for (std::size_t x = 0; x < w; ++x) {
       const std::uint8_t* p = image.rgba.data() + (y * w + x) * 4;
       const std::uint8_t* up = y == 0 ? nullptr : p - w * 4;
-      for (int c = 0; c < channels; ++c) raw.push_back(static_cast<char>(up ? static_cast<std::uint8_t>(p[c] - up[c]) : p[c]));
+      for (int c = 0; c < channels; ++c)
+        raw.push_back(static_cast<char>(up ? static_cast<std::uint8_t>(p[c] - up[c]) : p[c]));
     }
   }
   uLongf size = compressBound(static_cast<uLong>(raw.size()));

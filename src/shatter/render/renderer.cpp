@@ -232,6 +232,11 @@ Result<GLuint> link(const char* vs, const char* fs, const char* name) {
 
 using Mat4f = Eigen::Matrix4f;
 
+// A byte offset into the bound vertex buffer, as glVertexAttribPointer takes it.
+const void* buffer_offset(std::size_t bytes) {
+  return reinterpret_cast<const void*>(bytes);  // NOLINT(performance-no-int-to-ptr): the GL API's form
+}
+
 void set_mat(GLuint program, const char* name, const Mat4& m) {
   const Mat4f f = m.cast<float>();
   glUniformMatrix4fv(glGetUniformLocation(program, name), 1, GL_FALSE, f.data());  // column-major
@@ -283,15 +288,24 @@ struct Glyph {
   std::array<std::uint8_t, 7> rows;
 };
 constexpr std::array<Glyph, 19> kGlyphs = {{
-    {'0', {0x0e, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0e}}, {'1', {0x04, 0x0c, 0x04, 0x04, 0x04, 0x04, 0x0e}},
-    {'2', {0x0e, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1f}}, {'3', {0x1e, 0x01, 0x01, 0x0e, 0x01, 0x01, 0x1e}},
-    {'4', {0x02, 0x06, 0x0a, 0x12, 0x1f, 0x02, 0x02}}, {'5', {0x1f, 0x10, 0x1e, 0x01, 0x01, 0x11, 0x0e}},
-    {'6', {0x06, 0x08, 0x10, 0x1e, 0x11, 0x11, 0x0e}}, {'7', {0x1f, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08}},
-    {'8', {0x0e, 0x11, 0x11, 0x0e, 0x11, 0x11, 0x0e}}, {'9', {0x0e, 0x11, 0x11, 0x0f, 0x01, 0x02, 0x0c}},
-    {'.', {0x00, 0x00, 0x00, 0x00, 0x00, 0x0c, 0x0c}}, {'-', {0x00, 0x00, 0x00, 0x1f, 0x00, 0x00, 0x00}},
-    {'+', {0x00, 0x04, 0x04, 0x1f, 0x04, 0x04, 0x00}}, {'M', {0x11, 0x1b, 0x15, 0x15, 0x11, 0x11, 0x11}},
-    {'P', {0x1e, 0x11, 0x11, 0x1e, 0x10, 0x10, 0x10}}, {'a', {0x00, 0x00, 0x0e, 0x01, 0x0f, 0x11, 0x0f}},
-    {'k', {0x10, 0x10, 0x12, 0x14, 0x18, 0x14, 0x12}}, {'G', {0x0e, 0x11, 0x10, 0x17, 0x11, 0x11, 0x0f}},
+    {'0', {0x0e, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0e}},
+    {'1', {0x04, 0x0c, 0x04, 0x04, 0x04, 0x04, 0x0e}},
+    {'2', {0x0e, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1f}},
+    {'3', {0x1e, 0x01, 0x01, 0x0e, 0x01, 0x01, 0x1e}},
+    {'4', {0x02, 0x06, 0x0a, 0x12, 0x1f, 0x02, 0x02}},
+    {'5', {0x1f, 0x10, 0x1e, 0x01, 0x01, 0x11, 0x0e}},
+    {'6', {0x06, 0x08, 0x10, 0x1e, 0x11, 0x11, 0x0e}},
+    {'7', {0x1f, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08}},
+    {'8', {0x0e, 0x11, 0x11, 0x0e, 0x11, 0x11, 0x0e}},
+    {'9', {0x0e, 0x11, 0x11, 0x0f, 0x01, 0x02, 0x0c}},
+    {'.', {0x00, 0x00, 0x00, 0x00, 0x00, 0x0c, 0x0c}},
+    {'-', {0x00, 0x00, 0x00, 0x1f, 0x00, 0x00, 0x00}},
+    {'+', {0x00, 0x04, 0x04, 0x1f, 0x04, 0x04, 0x00}},
+    {'M', {0x11, 0x1b, 0x15, 0x15, 0x11, 0x11, 0x11}},
+    {'P', {0x1e, 0x11, 0x11, 0x1e, 0x10, 0x10, 0x10}},
+    {'a', {0x00, 0x00, 0x0e, 0x01, 0x0f, 0x11, 0x0f}},
+    {'k', {0x10, 0x10, 0x12, 0x14, 0x18, 0x14, 0x12}},
+    {'G', {0x0e, 0x11, 0x10, 0x17, 0x11, 0x11, 0x0f}},
     {' ', {0, 0, 0, 0, 0, 0, 0}},
 }};
 
@@ -426,11 +440,11 @@ struct Renderer::Impl {
       glEnableVertexAttribArray(0);
       glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, nullptr);
       glEnableVertexAttribArray(1);
-      glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(3 * sizeof(float)));
+      glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride, buffer_offset(3 * sizeof(float)));
       glEnableVertexAttribArray(2);
-      glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(6 * sizeof(float)));
+      glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, stride, buffer_offset(6 * sizeof(float)));
       glEnableVertexAttribArray(3);
-      glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<void*>(9 * sizeof(float)));
+      glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, stride, buffer_offset(9 * sizeof(float)));
       m.count = static_cast<GLsizei>(data.size() / 10);
       glBindBuffer(GL_ARRAY_BUFFER, m.stress_vbo);
       glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(static_cast<std::size_t>(m.count) * sizeof(float)), nullptr,
@@ -511,8 +525,8 @@ Result<std::unique_ptr<Renderer>> Renderer::create() {
   if (status != GL_FRAMEBUFFER_COMPLETE) return make_error("renderer: the shadow map framebuffer is incomplete");
 
   // The ground: one quad, placed and scaled by its model matrix (unit square in x-z).
-  const float quad[] = {-1, 0, -1, 0, 1, 0, 0, 0, 0, 0, 1, 0, -1, 0, 1, 0, 0, 0, 0, 0, 1, 0, 1, 0, 1, 0, 0, 0, 0, 0,
-                        -1, 0, -1, 0, 1, 0, 0, 0, 0, 0, 1, 0, 1, 0, 1, 0, 0, 0, 0, 0, -1, 0, 1, 0, 1, 0, 0, 0, 0, 0};
+  const float quad[] = {-1, 0, -1, 0, 1, 0, 0, 0, 0, 0, 1, 0, -1, 0, 1, 0, 0, 0, 0, 0, 1,  0, 1, 0, 1, 0, 0, 0, 0, 0,
+                        -1, 0, -1, 0, 1, 0, 0, 0, 0, 0, 1, 0, 1,  0, 1, 0, 0, 0, 0, 0, -1, 0, 1, 0, 1, 0, 0, 0, 0, 0};
   glGenVertexArrays(1, &im.ground_vao);
   glGenBuffers(1, &im.ground_vbo);
   glGenBuffers(1, &im.ground_stress);
@@ -521,9 +535,9 @@ Result<std::unique_ptr<Renderer>> Renderer::create() {
   glBufferData(GL_ARRAY_BUFFER, sizeof quad, quad, GL_STATIC_DRAW);
   for (GLuint a = 0; a < 4; ++a) glEnableVertexAttribArray(a);
   glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 10 * sizeof(float), nullptr);
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 10 * sizeof(float), reinterpret_cast<void*>(3 * sizeof(float)));
-  glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, 10 * sizeof(float), reinterpret_cast<void*>(6 * sizeof(float)));
-  glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, 10 * sizeof(float), reinterpret_cast<void*>(9 * sizeof(float)));
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 10 * sizeof(float), buffer_offset(3 * sizeof(float)));
+  glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, 10 * sizeof(float), buffer_offset(6 * sizeof(float)));
+  glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, 10 * sizeof(float), buffer_offset(9 * sizeof(float)));
   const float zeros[6] = {0, 0, 0, 0, 0, 0};
   glBindBuffer(GL_ARRAY_BUFFER, im.ground_stress);
   glBufferData(GL_ARRAY_BUFFER, sizeof zeros, zeros, GL_STATIC_DRAW);
@@ -537,7 +551,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create() {
   glEnableVertexAttribArray(0);
   glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(FlatVertex), nullptr);
   glEnableVertexAttribArray(1);
-  glVertexAttribPointer(1, 4, GL_FLOAT, GL_FALSE, sizeof(FlatVertex), reinterpret_cast<void*>(3 * sizeof(float)));
+  glVertexAttribPointer(1, 4, GL_FLOAT, GL_FALSE, sizeof(FlatVertex), buffer_offset(3 * sizeof(float)));
   glBindVertexArray(0);
   return r;
 }
@@ -737,8 +751,8 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
     constexpr int kSteps = 16;
     for (int k = 0; k < kSteps; ++k) {  // the shader's linear ramps, in gamma space
       const double ta = 1.0 - static_cast<double>(k) / kSteps, tb = 1.0 - static_cast<double>(k + 1) / kSteps;
-      quad(x0, y0 + (bar_h / 2) * k / kSteps, x1, y0 + (bar_h / 2) * (k + 1) / kSteps,
-           gamma(grey + ta * (red - grey)), gamma(grey + tb * (red - grey)));
+      quad(x0, y0 + (bar_h / 2) * k / kSteps, x1, y0 + (bar_h / 2) * (k + 1) / kSteps, gamma(grey + ta * (red - grey)),
+           gamma(grey + tb * (red - grey)));
       quad(x0, ymid + (bar_h / 2) * k / kSteps, x1, ymid + (bar_h / 2) * (k + 1) / kSteps,
            gamma(grey + (1 - ta) * (green - grey)), gamma(grey + (1 - tb) * (green - grey)));
     }
