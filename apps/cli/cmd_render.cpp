@@ -11,6 +11,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
@@ -38,6 +39,7 @@ struct RenderArgs {
   std::string view = "material";
   double stress_scale = 0;
   std::vector<double> camera;  // yaw, pitch in degrees [, distance m]
+  std::vector<double> target;  // point looked at, m
   bool no_mp4 = false;
   bool no_marks = false;
   int threads = -1;
@@ -95,6 +97,13 @@ int render(const RenderArgs& args) {
   if (!args.camera.empty() && args.camera.size() != 2 && args.camera.size() != 3)
     return report_error("--camera: expected YAW,PITCH (degrees) or YAW,PITCH,DISTANCE (m)", kExitUsage);
   if (args.threads > 1024) return report_error("--threads: expected at most 1024", kExitUsage);
+  if (!args.target.empty() && args.target.size() != 3) return report_error("--target: expected X,Y,Z (m)", kExitUsage);
+  for (const double v : args.camera)
+    if (!std::isfinite(v)) return report_error("--camera: expected finite numbers", kExitUsage);
+  for (const double v : args.target)
+    if (!std::isfinite(v)) return report_error("--target: expected finite numbers", kExitUsage);
+  if (args.camera.size() == 3 && !(args.camera[2] > 0))
+    return report_error("--camera: the distance must be > 0", kExitUsage);
   const std::string path = args.scene.empty() ? default_scene_path() : args.scene;
   auto scene = read_scene(path);
   if (!scene) return report_error(scene.error().to_string(), kExitBadInput);
@@ -127,6 +136,7 @@ int render(const RenderArgs& args) {
     camera.pitch = args.camera[1] * 3.14159265358979 / 180;
     if (args.camera.size() == 3) camera.distance = args.camera[2];
   }
+  if (!args.target.empty()) camera.target = Vec3(args.target[0], args.target[1], args.target[2]);
 
   const double duration = args.time >= 0 ? args.time : scene->duration;
   const double dt = scene->world.time_step;
@@ -243,6 +253,8 @@ RunFn setup_render(CLI::App& sub) {
   sub.add_option("--stress-scale", args->stress_scale, "Stress of full colour, Pa (default: the frame's largest)")
       ->check(CLI::NonNegativeNumber);
   sub.add_option("--camera", args->camera, "YAW,PITCH in degrees [,DISTANCE in m] (default: framed)")->delimiter(',');
+  sub.add_option("--target", args->target, "X,Y,Z: the point looked at, m (default: the bodies' centre)")
+      ->delimiter(',');
   sub.add_flag("--no-mp4", args->no_mp4, "Do not make render.mp4 even when ffmpeg is installed");
   sub.add_flag("--no-marks", args->no_marks, "Do not mark impact points and crack planes");
   sub.add_option("--threads", args->threads, "Simulation threads (results are the same on any number)")
