@@ -5,8 +5,11 @@
 #   scripts/setup.sh --fuzz   also clang-19 and its libFuzzer runtime
 #   scripts/setup.sh --tsan   also clang-19, its TSan runtime, LLVM's OpenMP runtime with the Archer
 #                             tool (libomp-19-dev) and llvm-symbolizer (llvm-19), for the tsan preset
-# The flags combine (scripts/test.sh passes both).
+#   scripts/setup.sh --test   also the test tools from the npm registry: the Khronos glTF validator
+#                             (tests/tools/gltf; Node.js and npm from Debian when npm is missing)
+# The flags combine (scripts/test.sh passes all three).
 set -euo pipefail
+cd "$(dirname "$0")/.."
 
 packages=(
   # toolchain
@@ -26,11 +29,16 @@ packages=(
   # (with its GLFW and OpenGL 3 back ends); Xvfb for the viewer's tests
   libepoxy-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libglfw3-dev libimgui-dev xvfb xauth
 )
+test_tools=0
 for arg in "$@"; do
   case "$arg" in
     --fuzz) packages+=(clang-19 libclang-rt-19-dev) ;;
     --tsan) packages+=(clang-19 libclang-rt-19-dev libomp-19-dev llvm-19) ;;
-    *) echo "setup: unknown option $arg (expected --fuzz and/or --tsan)" >&2; exit 2 ;;
+    --test)
+      test_tools=1
+      command -v npm >/dev/null || packages+=(nodejs npm)
+      ;;
+    *) echo "setup: unknown option $arg (expected --fuzz, --tsan and/or --test)" >&2; exit 2 ;;
   esac
 done
 # Each package once (--fuzz and --tsan share clang-19).
@@ -43,8 +51,18 @@ for p in "${packages[@]}"; do
   fi
 done
 
+# The glTF validator, at the version package-lock.json names (after the packages: npm may be one).
+install_test_tools() {
+  [[ $test_tools == 1 ]] || return 0
+  if [[ ! -f tests/tools/gltf/node_modules/gltf-validator/package.json ]]; then
+    echo "setup: installing the glTF validator (npm ci in tests/tools/gltf)"
+    (cd tests/tools/gltf && npm ci --no-audit --no-fund --silent)
+  fi
+}
+
 if [[ ${#missing[@]} -eq 0 ]]; then
   echo "setup: all ${#packages[@]} packages present"
+  install_test_tools
   exit 0
 fi
 
@@ -57,4 +75,5 @@ fi
 export DEBIAN_FRONTEND=noninteractive
 $sudo apt-get update -qq
 $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+install_test_tools
 echo "setup: done"

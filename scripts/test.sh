@@ -15,7 +15,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
 
-scripts/setup.sh --fuzz --tsan
+scripts/setup.sh --fuzz --tsan --test
 
 echo "== layout"
 scripts/format.sh --check

@@ -37,8 +37,9 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using Json = nlohmann::json;
 
-enum class Tool : int { drag = 0, hammer = 1, press = 2, throw_asset = 3 };
-constexpr const char* kToolNames[] = {"Drag", "Hammer", "Press", "Throw"};
+enum class Tool : int { drag = 0, hammer = 1, press = 2, throw_asset = 3, slice = 4 };
+constexpr const char* kToolNames[] = {"Drag", "Hammer", "Press", "Throw", "Slice"};
+constexpr int kTools = 5;
 
 std::string g_glfw_error;
 extern "C" void on_glfw_error(int code, const char* message) {
@@ -64,8 +65,17 @@ Result<std::vector<ScriptStep>> read_script(const std::string& path) {
   }
   if (!j.is_array()) return make_error(path + ": expected an array of steps");
   std::vector<ScriptStep> steps;
-  const std::vector<std::string> known = {"tool",  "click", "screenshot", "view", "play",
-                                          "pause", "step",  "reset",      "quit", "expect_bodies_at_least"};
+  const std::vector<std::string> known = {"tool",
+                                          "click",
+                                          "drag",
+                                          "screenshot",
+                                          "view",
+                                          "play",
+                                          "pause",
+                                          "step",
+                                          "reset",
+                                          "quit",
+                                          "expect_bodies_at_least"};
   for (std::size_t i = 0; i < j.size(); ++i) {
     const Json& s = j[i];
     const std::string where = path + ": [" + std::to_string(i) + "]";
@@ -75,6 +85,19 @@ Result<std::vector<ScriptStep>> read_script(const std::string& path) {
     ScriptStep st{s["frame"].get<int>(), s["action"].get<std::string>(), s, 0};
     if (std::find(known.begin(), known.end(), st.action) == known.end())
       return make_error(where + ".action: unknown action \"" + st.action + "\"");
+    auto point = [&](const char* key) {
+      return s.contains(key) && s[key].is_array() && s[key].size() == 2 && s[key][0].is_number() &&
+             s[key][1].is_number();
+    };
+    if (st.action == "drag" && !(s.contains("across") && s["across"].is_string()) && (!point("from") || !point("to")))
+      return make_error(where + ": a drag needs \"from\": [x, y] and \"to\": [x, y] (pixels), or \"across\": <body>");
+    if (st.action == "click" && !(s.contains("body") && s["body"].is_string()) &&
+        !(s.contains("x") && s["x"].is_number() && s.contains("y") && s["y"].is_number()))
+      return make_error(where + ": a click needs \"body\": <name> or \"x\" and \"y\" (pixels)");
+    for (const char* key : {"impulse", "speed", "force", "count"})
+      if (s.contains(key) && !s[key].is_number()) return make_error(where + "." + key + ": expected a number");
+    for (const char* key : {"tool", "path", "view"})
+      if (s.contains(key) && !s[key].is_string()) return make_error(where + "." + key + ": expected a string");
     steps.push_back(std::move(st));
   }
   // By frame, in file order within a frame.
@@ -112,6 +135,7 @@ class Viewer {
   void tool_up();
   void apply_tools_before_step();
   void throw_asset(bool drop);
+  void slice_along_stroke();
   void focus_selection();
   // Frame.
   void ui();
@@ -151,6 +175,7 @@ class Viewer {
   Vec3 tool_normal_ = Vec3::Zero();  // pressed surface normal, body frame
   double drag_depth_ = 0;            // distance of the grab plane from the eye
   Vec3 drag_target_ = Vec3::Zero();
+  double stroke_x0_ = 0, stroke_y0_ = 0, stroke_x1_ = 0, stroke_y1_ = 0;  // slice stroke, pixels
   // Mouse.
   double last_x_ = 0, last_y_ = 0;
   // Stats and log.
@@ -327,6 +352,12 @@ void Viewer::tool_down(double x, double y) {
     throw_asset(false);
     return;
   }
+  if (tool_ == Tool::slice) {  // a stroke on the screen: the plane through the eye and the stroke
+    tool_active_ = true;
+    stroke_x0_ = stroke_x1_ = x;
+    stroke_y0_ = stroke_y1_ = y;
+    return;
+  }
   const render::Pick hit = render::pick_body(w, origin, dir);
   selected_ = hit.body;
   if (hit.body.index < 0) return;
@@ -355,11 +386,17 @@ void Viewer::tool_down(double x, double y) {
       tool_active_ = true;
       log(fmt::format("{:.3f} s  press on body {}: {:.3g} N", w.time(), hit.body.index, press_force_));
       break;
-    case Tool::throw_asset: break;
+    case Tool::throw_asset:
+    case Tool::slice: break;
   }
 }
 
 void Viewer::tool_drag(double x, double y) {
+  if (tool_active_ && tool_ == Tool::slice) {
+    stroke_x1_ = x;
+    stroke_y1_ = y;
+    return;
+  }
   if (!tool_active_ || tool_ != Tool::drag) return;
   int fbw = 0, fbh = 0;
   glfwGetWindowSize(window_, &fbw, &fbh);
@@ -368,7 +405,45 @@ void Viewer::tool_drag(double x, double y) {
   drag_target_ = origin + drag_depth_ * dir;
 }
 
-void Viewer::tool_up() { tool_active_ = false; }
+void Viewer::tool_up() {
+  if (tool_active_ && tool_ == Tool::slice) slice_along_stroke();
+  tool_active_ = false;
+}
+
+// The plane holds the eye and the rays through both ends of the stroke; it cuts every dynamic
+// body that a ray along the stroke meets (World::slice).
+void Viewer::slice_along_stroke() {
+  World& w = *built_->world;
+  if (std::hypot(stroke_x1_ - stroke_x0_, stroke_y1_ - stroke_y0_) < 5) return;
+  int ww = 0, wh = 0;
+  glfwGetWindowSize(window_, &ww, &wh);
+  Vec3 eye, d0, d1;
+  camera_.ray(stroke_x0_, stroke_y0_, ww, wh, eye, d0);
+  camera_.ray(stroke_x1_, stroke_y1_, ww, wh, eye, d1);
+  const Vec3 normal = d0.cross(d1);
+  if (!(normal.norm() > 1e-9)) return;
+  std::vector<BodyId> hit;
+  constexpr int kSamples = 32;
+  for (int k = 0; k <= kSamples; ++k) {
+    const double t = static_cast<double>(k) / kSamples;
+    Vec3 o, d;
+    camera_.ray(stroke_x0_ + t * (stroke_x1_ - stroke_x0_), stroke_y0_ + t * (stroke_y1_ - stroke_y0_), ww, wh, o, d);
+    const render::Pick p = render::pick_body(w, o, d);
+    if (p.body.index >= 0 && w.body_type(p.body) == BodyType::dynamic &&
+        std::find(hit.begin(), hit.end(), p.body) == hit.end())
+      hit.push_back(p.body);
+  }
+  std::sort(hit.begin(), hit.end());
+  if (cursor_ + 1 < recording_.size()) recording_.resize(cursor_ + 1);
+  for (const BodyId id : hit) {
+    auto pieces = w.slice(id, eye, normal.normalized());
+    if (!pieces)
+      log("slice: " + pieces.error().message);
+    else
+      log(fmt::format("{:.3f} s  sliced body {} into {} pieces", w.time(), id.index, *pieces));
+  }
+  if (!hit.empty()) record();
+}
 
 void Viewer::throw_asset(bool drop) {
   if (assets_.empty()) {
@@ -447,7 +522,7 @@ void Viewer::handle_mouse() {
     if (ImGui::IsKeyPressed('S') && !playing_) step_once();
     if (ImGui::IsKeyPressed('P'))
       screenshot(fmt::format("{}/screenshot_{:03d}.png", opt_.out_dir, screenshot_count_++));
-    for (int k = 0; k < 4; ++k)
+    for (int k = 0; k < kTools; ++k)
       if (ImGui::IsKeyPressed('1' + k)) tool_ = static_cast<Tool>(k);
   }
 }
@@ -495,7 +570,7 @@ void Viewer::ui() {
   ImGui::Separator();
   ImGui::TextDisabled("tool");
   int tool = static_cast<int>(tool_);
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < kTools; ++k) {
     if (k) ImGui::SameLine();
     ImGui::RadioButton(kToolNames[k], &tool, k);
   }
@@ -532,7 +607,12 @@ void Viewer::ui() {
       ImGui::TextDisabled("(click: throw)");
       break;
     case Tool::drag: ImGui::TextDisabled("click and drag a body"); break;
+    case Tool::slice: ImGui::TextDisabled("draw a line across bodies: the plane through it cuts them"); break;
   }
+  if (tool_active_ && tool_ == Tool::slice)
+    ImGui::GetForegroundDrawList()->AddLine(ImVec2(static_cast<float>(stroke_x0_), static_cast<float>(stroke_y0_)),
+                                            ImVec2(static_cast<float>(stroke_x1_), static_cast<float>(stroke_y1_)),
+                                            IM_COL32(255, 220, 60, 255), 2.0F);
   // View.
   ImGui::Separator();
   ImGui::TextDisabled("view");
@@ -644,6 +724,7 @@ void Viewer::run_script() {
       if (lower == "hammer") tool_ = Tool::hammer;
       if (lower == "press") tool_ = Tool::press;
       if (lower == "throw") tool_ = Tool::throw_asset;
+      if (lower == "slice") tool_ = Tool::slice;
       if (s.args.contains("impulse")) hammer_impulse_ = s.args["impulse"].get<double>();
       if (s.args.contains("speed")) hammer_speed_ = s.args["speed"].get<double>();
       if (s.args.contains("force")) press_force_ = s.args["force"].get<double>();
@@ -668,6 +749,31 @@ void Viewer::run_script() {
         y = s.args.value("y", 0.0);
       }
       tool_down(x, y);
+      tool_up();
+    } else if (s.action == "drag") {  // press at "from", move to "to", release (the slice tool's stroke)
+      double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+      if (s.args.contains("across")) {  // a level stroke 300 px long through a body's centre on screen
+        const std::string name = s.args["across"].get<std::string>();
+        std::size_t i = 0;
+        while (i < scene_.bodies.size() && scene_.bodies[i].name != name) ++i;
+        if (i == scene_.bodies.size() || w.removed(built_->bodies[i])) {
+          log("script: no live body named " + name);
+          continue;
+        }
+        int ww = 0, wh = 0;
+        glfwGetWindowSize(window_, &ww, &wh);
+        const Vec3 c = camera_.project(w.rigid_state(built_->bodies[i]).position, ww, wh);
+        x0 = c.x() - 150;
+        x1 = c.x() + 150;
+        y0 = y1 = c.y();
+      } else {
+        x0 = s.args["from"][0].get<double>();
+        y0 = s.args["from"][1].get<double>();
+        x1 = s.args["to"][0].get<double>();
+        y1 = s.args["to"][1].get<double>();
+      }
+      tool_down(x0, y0);
+      tool_drag(x1, y1);
       tool_up();
     } else if (s.action == "screenshot") {
       if (!screenshot(s.args.value("path", fmt::format("{}/screenshot_{:03d}.png", opt_.out_dir, screenshot_count_++))))

@@ -1,5 +1,5 @@
 // `shatter view`: a window on a scene (GLFW, Dear ImGui, the renderer) with the paper's tools:
-// pick and drag, hammer, press, drop and throw; play, pause, step, a recording to scrub, the
+// pick and drag, hammer, press, slice, drop and throw; play, pause, step, a recording to scrub, the
 // stress view, statistics and an event log (docs/viewer.md). Every tool goes through the public
 // World API (strike, press, apply_impulse, add_body), as an embedding program would.
 #pragma once

@@ -404,6 +404,31 @@ TEST(CmdView, AHammerBlowThroughTheToolPathBreaksTheVase) {
   EXPECT_GT(dark, 390 * 540 / 3);
 }
 
+TEST(CmdView, ASliceStrokeCutsTheVase) {
+  SHATTER_REQUIRE_TOOL(!test::cli_path().empty(), "the shatter CLI");
+  SHATTER_REQUIRE_TOOL(have_xvfb(), "xvfb-run (package xvfb)");
+  test::TempDir dir;
+  const std::string script = dir.file("script.json");
+  {
+    std::ofstream out(script);
+    out << R"([
+      {"frame": 0, "action": "pause"},
+      {"frame": 1, "action": "tool", "tool": "slice"},
+      {"frame": 2, "action": "drag", "across": "vase"},
+      {"frame": 3, "action": "expect_bodies_at_least", "count": 2},
+      {"frame": 3, "action": "quit"}
+    ])";
+  }
+  auto r = test::run_command("xvfb-run -a -s '-screen 0 1024x768x24' " + test::cli_path() + " view " +
+                                 std::string(SHATTER_SOURCE_DIR) + "/scenes/vase_drop.json --size 640x360 --script " +
+                                 script,
+                             true);
+  EXPECT_EQ(r.status, 0) << r.output;
+  const auto at = r.output.find("bodies ");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  EXPECT_GE(std::atoi(r.output.c_str() + at + 7), 2) << r.output;
+}
+
 TEST(CmdView, WithoutADisplayItSaysSoAndPointsToRender) {
   SHATTER_REQUIRE_TOOL(!test::cli_path().empty(), "the shatter CLI");
   auto r = test::run_command("env -u DISPLAY -u WAYLAND_DISPLAY " + test::cli_path() + " view " +

@@ -13,6 +13,7 @@
 
 #include "shatter/core/parallel.h"
 #include "shatter/core/random.h"
+#include "shatter/mesh/generate.h"
 #include "shatter/mesh/io/mesh_io.h"
 #include "shatter/mesh/validate.h"
 #include "shatter/meshing/mesh_shape.h"
@@ -512,6 +513,57 @@ TEST(Impacts, PressDentsClayWhileHeld) {
     EXPECT_FALSE(w.removed(*id));
     last = strain;
   }
+}
+
+}  // namespace
+}  // namespace shatter
+
+namespace shatter {
+namespace {
+
+TEST(Impacts, SliceCutsABodyInTwoThatFlyApart) {
+  const TetMesh m = make_box_mesh({.min = Vec3(-0.2, 0.3, -0.05), .max = Vec3(0.2, 0.4, 0.05), .cells = {12, 3, 3}});
+  RigidState rigid;
+  auto model = make_body_model(m, *material_preset("concrete"), ModelKind::stvk, &rigid);
+  ASSERT_OK(model);
+  World w;
+  w.add_plane({});
+  rigid.angular_velocity = Vec3(0, 3, 0);
+  // Not breakable: the halves land without breaking further, so what is seen is the slice's.
+  auto id = w.add_body(std::make_shared<const BodyModel>(std::move(*model)), {.rigid = rigid, .breakable = false});
+  ASSERT_OK(id);
+  w.step();
+  const double mass = w.model(*id)->mass.mass;
+  // Miss, then cut at the middle, vertically.
+  auto miss = w.slice(*id, Vec3(5, 0, 0), Vec3::UnitX());
+  ASSERT_OK(miss);
+  EXPECT_EQ(*miss, 0);
+  EXPECT_FALSE(w.removed(*id));
+  auto pieces = w.slice(*id, w.rigid_state(*id).position, Vec3(1, 0, 0.1));
+  ASSERT_OK(pieces);
+  EXPECT_EQ(*pieces, 2);
+  EXPECT_TRUE(w.removed(*id));
+  EXPECT_EQ(w.events().cracks.size(), 1U);
+  ASSERT_EQ(w.events().fragments.size(), 2U);
+  double total = 0;
+  for (const FragmentRecord& f : w.events().fragments) {
+    total += f.mass;
+    EXPECT_EQ(w.parent(f.body), *id);
+  }
+  EXPECT_NEAR(total, mass, 1e-12 * mass);
+  // The halves keep spinning apart, then fall and lie on the ground; nothing is lost or tunnels.
+  for (int i = 0; i < 120; ++i) w.step();
+  Index live = 0;
+  for (Index s = 0; s < w.body_count(); ++s) {
+    const BodyId b = w.body_id(s);
+    if (w.removed(b) || !w.model(b)) continue;
+    ++live;
+    for (const Vec3& p : w.surface(b).positions) EXPECT_GT(p.y(), -0.01);
+  }
+  EXPECT_EQ(live, 2);
+  // Errors.
+  EXPECT_FALSE(w.slice(*id, Vec3::Zero(), Vec3::UnitX()).ok());           // removed
+  EXPECT_FALSE(w.slice(BodyId{0, 0}, Vec3::Zero(), Vec3::UnitX()).ok());  // the ground
 }
 
 }  // namespace

@@ -123,7 +123,7 @@ struct ImpactResult {
   double contact_time = 0;          ///< Hertz contact time (clamped), s
   double force = 0;                 ///< total static load, N (the peak of the impact)
   double patch_radius = 0;          ///< radius the load of each contact is spread over, m
-  double collision_radius = 0;      ///< r_coll, m
+  double collision_radius = 0;      ///< r_coll, m (0 when held by inertia relief)
   Vec3 load_point = Vec3::Zero();   ///< impulse-weighted contact point, world, m
   Index loaded_nodes = 0;           ///< nodes carrying load
   Index held_nodes = 0;             ///< nodes held
@@ -151,6 +151,14 @@ struct ImpactResult {
 /// model, non-finite contacts.
 Result<ImpactResult> analyze_impact(const BodyModel& model, BodyState& state, std::span<const ImpactContact> contacts,
                                     const ImpactSettings& settings = {});
+
+/// Cut a body along a plane through it (the viewer's slice tool, a saw): every tet the plane
+/// crosses is split along it, and the pieces become children as after a crack (exact mass, eq. 22
+/// motion, crack faces flagged, the debris rules of `settings`). The result holds one CrackEvent
+/// and no solve; no children when the plane misses the body. `point` and `normal` are world.
+/// Errors: a non-finite point or normal, a zero normal, a state that does not fit the model.
+Result<ImpactResult> slice_body(const BodyModel& model, const BodyState& state, const Vec3& point, const Vec3& normal,
+                                const ImpactSettings& settings = {});
 
 /// A force pressed on a body's surface (the paper's tools: a press, a held force field), world.
 struct SurfaceLoad {

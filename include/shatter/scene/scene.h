@@ -26,6 +26,7 @@ struct SceneBody {
   std::string name;        ///< unique in the scene ("body<k>" when not given)
   std::string mesh_path;   ///< a volume mesh file (resolved against the scene file's folder)
   std::string shape_path;  ///< or a shape file (JSON), meshed when the scene is built
+  std::string shape_text;  ///< or a shape written in the scene (shape_path then names where, for messages)
   double refine = 1;       ///< shape files: about this many times the file's tets
   Material material;
   ModelKind model = ModelKind::stvk;
@@ -64,6 +65,8 @@ struct SceneOutput {
   /// Also the bodies' surfaces at each frame, frames/surface_<k>.<surfaces>: "ply" (with face
   /// properties body and crack), "obj" or "stl"; "" for none.
   std::string surfaces;
+  /// scene.glb: the run as a glTF 2.0 animation at the same frames (docs/scenes.md#gltf).
+  bool gltf = false;
   bool events = true;   ///< events.jsonl
   bool summary = true;  ///< summary.json
 };

@@ -127,14 +127,17 @@ struct WorldSettings {
 
 /// One impact analysis of one body (a row of StepEvents::impacts).
 struct ImpactRecord {
-  BodyId body;                      ///< the body analysed
-  BodyId other;                     ///< the body it hit (the lowest slot when several events opened at once)
-  double time = 0;                  ///< end of the step, s
-  Vec3 point = Vec3::Zero();        ///< impulse-weighted contact point, world, m
-  double approach_speed = 0;        ///< m/s
-  double impulse = 0;               ///< N s
-  double contact_time = 0;          ///< s
-  double force = 0;                 ///< static load, N
+  BodyId body;                ///< the body analysed
+  BodyId other;               ///< the body it hit (the lowest slot when several events opened at once)
+  double time = 0;            ///< end of the step, s
+  Vec3 point = Vec3::Zero();  ///< impulse-weighted contact point, world, m
+  double approach_speed = 0;  ///< m/s
+  double impulse = 0;         ///< N s
+  double contact_time = 0;    ///< s
+  double force = 0;           ///< static load, N
+  /// r_coll, m: with the anchor-far hold, every node farther than this from the load was held
+  /// (0 for inertia relief and slices)
+  double collision_radius = 0;
   double max_principal_stress = 0;  ///< Pa
   double max_von_mises = 0;         ///< Pa
   bool converged = false;           ///< the static solve converged
@@ -268,6 +271,14 @@ class World {
   /// further while it is held, glass cracks once the force is enough. It ends early when the body
   /// breaks. Errors as strike's, and a negative radius or duration.
   Result<void> press(BodyId id, const Vec3& point, const Vec3& force, double radius, double duration);
+
+  /// A saw: cut the body at once along the plane through `point` with `normal` (world). Its pieces
+  /// replace it as after a fracture (slice_body): exact masses, the body's motion, crack faces,
+  /// siblings kept apart until they separate. The crack and the fragments are added to events()
+  /// (with an impact record of no impulse). Returns the number of pieces (0: the plane misses
+  /// the body, which stays as it is). Errors: an invalid or removed id, a body that is not a
+  /// dynamic tet body, a non-finite point or normal, a zero normal.
+  Result<Index> slice(BodyId id, const Vec3& point, const Vec3& normal);
 
   /// Whether the body was replaced by its fragments (it then takes no further part).
   [[nodiscard]] bool removed(BodyId id) const { return body(id).removed; }

@@ -13,24 +13,10 @@
 #include "shatter/core/types.h"
 #include "shatter/fem/material.h"
 #include "shatter/render/camera.h"
+#include "shatter/scene/appearance.h"
 #include "shatter/world/world.h"
 
 namespace shatter::render {
-
-/// How a material looks (linear RGB). Faces a crack opened show `inside`, with a solid texture
-/// of kind `grain` evaluated in rest coordinates, so every fragment of a body shows one
-/// continuous interior (docs/viewer.md).
-struct Appearance {
-  enum class Grain : std::int32_t { none = 0, stone = 1, porcelain = 2, clay = 3, glass = 4, metal = 5 };
-  Vec3 outside{0.7, 0.7, 0.7};
-  Vec3 inside{0.6, 0.6, 0.6};
-  double gloss = 0.2;  ///< 0 matte .. 1 glazed
-  Grain grain = Grain::none;
-};
-
-/// The look of a material: by its preset name (porcelain, glass, concrete, clay, steel, ...), else
-/// by its properties (brittle and stiff: stone; yielding and soft: clay; yielding and stiff: metal).
-Appearance appearance_for(const Material& material);
 
 /// One body to draw.
 struct DrawBody {
@@ -53,9 +39,10 @@ struct EventMark {
   double radius = 0;            ///< crack radius, m
 };
 
-/// Marks of the events of the last `keep` seconds.
+/// Marks of the events of the last `keep` seconds (at most the latest kMaxMarks).
 class EventMarks {
  public:
+  static constexpr std::size_t kMaxMarks = 24;
   explicit EventMarks(double keep = 1.0) : keep_(keep) {}
   /// Add a step's impacts and cracks (at the world's time) and drop marks older than `keep`.
   void add(const StepEvents& events, double time);

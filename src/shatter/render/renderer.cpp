@@ -642,6 +642,20 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
   glBindTexture(GL_TEXTURE_2D, im.shadow_tex);
   set_int(im.main, "u_shadow", 0);
 
+  for (std::size_t i = 0; i < frame.bodies.size(); ++i) {
+    const DrawBody& b = frame.bodies[i];
+    set_mat(im.main, "u_model", body_matrix(b));
+    set_vec(im.main, "u_outside", b.look.outside);
+    set_vec(im.main, "u_inside", b.look.inside);
+    set_float(im.main, "u_gloss", b.look.gloss);
+    set_int(im.main, "u_grain", static_cast<int>(b.look.grain));
+    set_float(im.main, "u_highlight", b.highlight ? 1.0 : 0.0);
+    glBindVertexArray(meshes[i]->vao);
+    glDrawArrays(GL_TRIANGLES, 0, meshes[i]->count);
+    ++stats.bodies;
+    stats.triangles += meshes[i]->count / 3;
+  }
+  // The ground after the bodies: its fragments behind them fail the depth test before shading.
   if (options.ground && frame.ground) {
     const Plane& p = *frame.ground;
     const double extent = std::max(50.0, 20 * radius);
@@ -667,20 +681,6 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
     set_float(im.ground, "u_ground_fade", extent);
     glBindVertexArray(im.ground_vao);
     glDrawArrays(GL_TRIANGLES, 0, 6);
-    glUseProgram(im.main);
-  }
-  for (std::size_t i = 0; i < frame.bodies.size(); ++i) {
-    const DrawBody& b = frame.bodies[i];
-    set_mat(im.main, "u_model", body_matrix(b));
-    set_vec(im.main, "u_outside", b.look.outside);
-    set_vec(im.main, "u_inside", b.look.inside);
-    set_float(im.main, "u_gloss", b.look.gloss);
-    set_int(im.main, "u_grain", static_cast<int>(b.look.grain));
-    set_float(im.main, "u_highlight", b.highlight ? 1.0 : 0.0);
-    glBindVertexArray(meshes[i]->vao);
-    glDrawArrays(GL_TRIANGLES, 0, meshes[i]->count);
-    ++stats.bodies;
-    stats.triangles += meshes[i]->count / 3;
   }
   glBindVertexArray(0);
 
@@ -697,6 +697,21 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
           const Vec3 a = p - s * Vec3::Unit(k), b = p + s * Vec3::Unit(k);
           lines.push_back({float(a.x()), float(a.y()), float(a.z()), 1.0F, 0.85F, 0.1F, alpha});
           lines.push_back({float(b.x()), float(b.y()), float(b.z()), 1.0F, 0.85F, 0.1F, alpha});
+        }
+        // The held region: with the paper's hold, everything beyond r_coll from the load was
+        // anchored; three orange circles show the sphere.
+        if (mk.radius > 0) {
+          constexpr int kSegments = 48;
+          for (int k = 0; k < 3; ++k) {
+            const Vec3 u = Vec3::Unit((k + 1) % 3), v = Vec3::Unit((k + 2) % 3);
+            for (int j = 0; j < kSegments; ++j) {
+              const double a0 = 2 * 3.14159265358979 * j / kSegments, a1 = 2 * 3.14159265358979 * (j + 1) / kSegments;
+              const Vec3 q0 = p + mk.radius * (std::cos(a0) * u + std::sin(a0) * v);
+              const Vec3 q1 = p + mk.radius * (std::cos(a1) * u + std::sin(a1) * v);
+              lines.push_back({float(q0.x()), float(q0.y()), float(q0.z()), 1.0F, 0.55F, 0.1F, 0.6F * alpha});
+              lines.push_back({float(q1.x()), float(q1.y()), float(q1.z()), 1.0F, 0.55F, 0.1F, 0.6F * alpha});
+            }
+          }
         }
       } else {
         Vec3 u = mk.normal.cross(Vec3::UnitX());

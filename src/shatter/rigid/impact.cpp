@@ -13,6 +13,8 @@
 #include <utility>
 
 #include "shatter/core/assert.h"
+#include "shatter/fracture/cut.h"
+#include "shatter/fracture/fragments.h"
 #include "shatter/fracture/stress.h"
 #include "shatter/mesh/mass_properties.h"
 #include "shatter/mesh/topology.h"
@@ -238,6 +240,71 @@ Result<void> check_state(const BodyModel& model, const BodyState& state, const c
   return {};
 }
 
+// The children of a cut body (fr: its fracture or slice), with the debris rules of `settings`:
+// exact mass properties, eq. 22 motion, crack faces and rest coordinates for solid textures.
+void make_children(const BodyModel& model, const RigidState& rigid, const FractureResult& fr, double body_radius,
+                   const ImpactSettings& settings, ImpactResult& result) {
+  const Material& material = model.fem.material;
+  // The density follows the rest volume so that the parent's mass is kept exactly
+  // (plasticity may have changed the volume; a cut never does).
+  double volume = 0;
+  for (const Fragment& f : fr.fragments) volume += f.mass.volume;
+  Material child_material = material;
+  child_material.density = model.mass.mass / volume;
+  // Debris rules: the heaviest max_fragments children over the size limits are kept.
+  std::vector<std::size_t> order(fr.fragments.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    const double va = fr.fragments[a].mass.volume, vb = fr.fragments[b].mass.volume;
+    return va != vb ? va > vb : a < b;
+  });
+
+  std::vector<char> keep(fr.fragments.size(), 0);
+  const double min_mass = std::max(settings.min_fragment_mass, settings.min_fragment_fraction * model.mass.mass);
+  int kept = 0;
+  for (const std::size_t k : order) {
+    const double m = child_material.density * fr.fragments[k].mass.volume;
+    if (kept < settings.max_fragments && m >= min_mass) {
+      keep[k] = 1;
+      ++kept;
+    } else {
+      ++result.debris_count;
+      result.debris_mass += m;
+    }
+  }
+  const Mat3 to_world = rigid.orientation.toRotationMatrix();
+  const double tolerance = 1e-7 * std::max(body_radius, 1e-3);
+  for (std::size_t k = 0; k < fr.fragments.size(); ++k) {
+    if (!keep[k]) continue;
+    const Fragment& f = fr.fragments[k];
+    const Vec3 c = f.mass.center;
+    auto m = std::make_shared<BodyModel>();
+    m->mesh = f.mesh;
+    for (Vec3& p : m->mesh.positions) p -= c;
+    m->faces = compute_faces(m->mesh);
+    m->surface = boundary_surface(m->mesh, m->faces);
+    m->fem = make_fem_model(m->mesh, child_material, model.fem.model);
+    m->mass = mass_properties(m->mesh, child_material.density);
+    m->material_origin = model.material_origin + c;
+    ImpactChild child;
+    child.parent_tet.resize(f.tet_map.size());
+    child.plastic_strain.resize(f.tet_map.size());
+    for (std::size_t e = 0; e < f.tet_map.size(); ++e) {
+      child.parent_tet[e] = fr.tet_parent[f.tet_map[e]];
+      child.plastic_strain[e] = fr.plastic_strain[f.tet_map[e]];
+    }
+    m->crack_face = child_crack_faces(model, fr.plastic.rest_positions, m->surface, c, child.parent_tet, tolerance);
+    // Eq. 22: the child keeps the velocity of the parent's material at its centre.
+    child.rigid.orientation = rigid.orientation;
+    child.rigid.position = rigid.position + to_world * c;
+    child.rigid.angular_velocity = rigid.angular_velocity;
+    child.rigid.linear_velocity =
+        rigid.linear_velocity + rigid.angular_velocity.cross(child.rigid.position - rigid.position);
+    child.model = std::move(m);
+    result.children.push_back(std::move(child));
+  }
+}
+
 // Steps 3-6 of the analysis (impact.h): hold, solve, stresses, plasticity, cracks, children, for
 // the nodal `forces` (N, body frame) of `loads`.
 Result<void> respond(const BodyModel& model, BodyState& state, const std::vector<LocalLoad>& loads,
@@ -251,8 +318,8 @@ Result<void> respond(const BodyModel& model, BodyState& state, const std::vector
   for (const LocalLoad& l : loads) total_weight += l.impulse;
   // Hold the body and solve its static response.
   StaticProblem problem;
-  result.collision_radius = settings.collision_radius * body_radius;
   if (settings.hold == ImpactHold::anchor_far) {
+    result.collision_radius = settings.collision_radius * body_radius;
     problem.anchors = hold_far(model.mesh, loads, result.collision_radius);
   } else {
     Vec3 local_load_point = Vec3::Zero();
@@ -316,64 +383,7 @@ Result<void> respond(const BodyModel& model, BodyState& state, const std::vector
     return {};
   }
 
-  // Children. The density follows the rest volume so that the parent's mass is kept exactly
-  // (plasticity may have changed the volume; a cut never does).
-  double volume = 0;
-  for (const Fragment& f : fr.fragments) volume += f.mass.volume;
-  Material child_material = material;
-  child_material.density = model.mass.mass / volume;
-  // Debris rules: the heaviest max_fragments children over the size limits are kept.
-  std::vector<std::size_t> order(fr.fragments.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    const double va = fr.fragments[a].mass.volume, vb = fr.fragments[b].mass.volume;
-    return va != vb ? va > vb : a < b;
-  });
-
-  std::vector<char> keep(fr.fragments.size(), 0);
-  const double min_mass = std::max(settings.min_fragment_mass, settings.min_fragment_fraction * model.mass.mass);
-  int kept = 0;
-  for (const std::size_t k : order) {
-    const double m = child_material.density * fr.fragments[k].mass.volume;
-    if (kept < settings.max_fragments && m >= min_mass) {
-      keep[k] = 1;
-      ++kept;
-    } else {
-      ++result.debris_count;
-      result.debris_mass += m;
-    }
-  }
-  const Mat3 to_world = rigid.orientation.toRotationMatrix();
-  const double tolerance = 1e-7 * std::max(body_radius, 1e-3);
-  for (std::size_t k = 0; k < fr.fragments.size(); ++k) {
-    if (!keep[k]) continue;
-    const Fragment& f = fr.fragments[k];
-    const Vec3 c = f.mass.center;
-    auto m = std::make_shared<BodyModel>();
-    m->mesh = f.mesh;
-    for (Vec3& p : m->mesh.positions) p -= c;
-    m->faces = compute_faces(m->mesh);
-    m->surface = boundary_surface(m->mesh, m->faces);
-    m->fem = make_fem_model(m->mesh, child_material, model.fem.model);
-    m->mass = mass_properties(m->mesh, child_material.density);
-    m->material_origin = model.material_origin + c;
-    ImpactChild child;
-    child.parent_tet.resize(f.tet_map.size());
-    child.plastic_strain.resize(f.tet_map.size());
-    for (std::size_t e = 0; e < f.tet_map.size(); ++e) {
-      child.parent_tet[e] = fr.tet_parent[f.tet_map[e]];
-      child.plastic_strain[e] = fr.plastic_strain[f.tet_map[e]];
-    }
-    m->crack_face = child_crack_faces(model, fr.plastic.rest_positions, m->surface, c, child.parent_tet, tolerance);
-    // Eq. 22: the child keeps the velocity of the parent's material at its centre.
-    child.rigid.orientation = rigid.orientation;
-    child.rigid.position = rigid.position + to_world * c;
-    child.rigid.angular_velocity = rigid.angular_velocity;
-    child.rigid.linear_velocity =
-        rigid.linear_velocity + rigid.angular_velocity.cross(child.rigid.position - rigid.position);
-    child.model = std::move(m);
-    result.children.push_back(std::move(child));
-  }
+  make_children(model, rigid, fr, body_radius, settings, result);
   result.fracture_ms = ms_since(t0);
   return {};
 }
@@ -517,6 +527,56 @@ Result<ImpactResult> analyze_load(const BodyModel& model, BodyState& state, std:
   }
   result.loaded_nodes = static_cast<Index>(std::count(loaded.begin(), loaded.end(), 1));
   SHATTER_TRY(done, respond(model, state, local, std::move(forces), body_radius, settings, result));
+  return result;
+}
+
+Result<ImpactResult> slice_body(const BodyModel& model, const BodyState& state, const Vec3& point, const Vec3& normal,
+                                const ImpactSettings& settings) {
+  if (!point.allFinite() || !normal.allFinite() || !(normal.norm() > 0))
+    return make_error("slice_body: the plane needs a finite point and a non-zero normal");
+  const Index nt = model.mesh.num_tets();
+  if (!state.plastic_strain.empty() && state.plastic_strain.size() != static_cast<std::size_t>(nt))
+    return make_error("slice_body: the state has " + std::to_string(state.plastic_strain.size()) +
+                      " plastic strains for " + std::to_string(nt) + " tets");
+  const auto t0 = Clock::now();
+  ImpactResult result;
+  result.analysed = true;
+  result.load_point = point;
+  const Quat to_body = state.rigid.orientation.conjugate();
+  const CutPlane plane{.point = to_body * (point - state.rigid.position), .normal = (to_body * normal).normalized()};
+  std::vector<Index> all(static_cast<std::size_t>(nt));
+  std::iota(all.begin(), all.end(), Index(0));
+  // Every crossed tet is split (no minimum piece volume: with one, a single sliver would keep its
+  // neighbours whole too, to stay conforming, and the cut would follow the faces); nodes within a
+  // tenth of an edge of the plane count as on it, which keeps the slivers away.
+  CutResult cut =
+      cut_mesh(model.mesh, plane, all, {.split_tets = true, .snap_fraction = 0.1, .min_volume_fraction = 0});
+  FractureResult fr;
+  fr.mesh = std::move(cut.mesh);
+  fr.tet_parent = std::move(cut.tet_parent);
+  fr.plastic_strain.resize(fr.tet_parent.size(), 0.0);
+  if (!state.plastic_strain.empty())
+    for (std::size_t e = 0; e < fr.tet_parent.size(); ++e)
+      fr.plastic_strain[e] = state.plastic_strain[static_cast<std::size_t>(fr.tet_parent[e])];
+  fr.plastic.rest_positions = model.mesh.positions;
+  fr.fragments = extract_fragments(fr.mesh, model.fem.material.density);
+  if (fr.fragments.size() < 2) {  // the plane misses the body (or only grazes it)
+    result.fracture_ms = ms_since(t0);
+    return result;
+  }
+  const double body_radius = body_radius_of(model);
+  CrackEvent event;
+  event.plan.origin = plane.point;
+  event.plan.normal = plane.normal;
+  event.plan.radius = 2 * body_radius;  // through the whole body
+  event.tets_marked = nt;
+  event.tets_split = cut.tets_split;
+  event.edge_nodes = cut.edge_nodes;
+  event.nodes_duplicated = cut.nodes_duplicated;
+  event.faces_cut = cut.faces_cut;
+  result.cracks.push_back(event);
+  make_children(model, state.rigid, fr, body_radius, settings, result);
+  result.fracture_ms = ms_since(t0);
   return result;
 }
 

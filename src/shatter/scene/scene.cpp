@@ -1,9 +1,11 @@
 // Scene files and their runs (see scene.h and docs/scenes.md).
 #include "shatter/scene/scene.h"
+#include "shatter/scene/gltf.h"
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -32,7 +34,8 @@ double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std
 
 // Scenes are small; a larger file is a mistake.
 constexpr std::uint64_t kMaxSceneBytes = 16ULL << 20;
-constexpr double kMaxDuration = 24 * 3600.0;  // s: a longer run is a mistake in the file
+constexpr double kMaxDuration = 24 * 3600.0;   // s: a longer run is a mistake in the file
+constexpr std::size_t kMaxSceneBodies = 4096;  // the world's default body budget
 constexpr int kMaxSubsteps = 1000;
 
 Result<double> read_in_range(const Json& value, const Where& where, double lo, double hi, const char* what) {
@@ -128,8 +131,9 @@ Result<SceneBody> read_body(const Json& value, const Where& where, const Scene& 
   SceneBody b;
   b.name = "body" + std::to_string(index);
   b.impact = scene.world.impact;
-  for (const char* key : {"name", "mesh", "shape", "refine", "material", "model", "type", "position", "rotation",
-                          "height", "velocity", "angular_velocity", "friction", "restitution", "breakable", "impact"})
+  for (const char* key :
+       {"name", "mesh", "shape", "refine", "material", "model", "type", "position", "rotation", "height", "velocity",
+        "angular_velocity", "friction", "restitution", "breakable", "impact", "array"})
     (void)r.get(key);
   SHATTER_TRY(known, r.finish());
   if (const Json* j = r.get("name")) {
@@ -140,10 +144,15 @@ Result<SceneBody> read_body(const Json& value, const Where& where, const Scene& 
   const Json* js = r.get("shape");
   if ((jm != nullptr) == (js != nullptr))
     return where.error(jm ? "give either \"mesh\" or \"shape\", not both"
-                          : "missing \"mesh\" (a volume mesh file) or \"shape\" (a shape file, JSON)");
+                          : "missing \"mesh\" (a volume mesh file) or \"shape\" (a shape file or object)");
   if (jm) {
     SHATTER_TRY(v, json_input::read_string(*jm, where.key("mesh")));
     b.mesh_path = resolve(base_dir, *v);
+  } else if (js->is_object()) {  // a shape written in the scene, as in a shape file
+    b.shape_text = js->dump();
+    b.shape_path = scene.file + ": " + where.key("shape").path;
+    auto shape = parse_shape_json(b.shape_text, b.shape_path, {.base_dir = base_dir, .load_surface = {}});
+    if (!shape) return make_error(shape.error().to_string());
   } else {
     SHATTER_TRY(v, json_input::read_string(*js, where.key("shape")));
     b.shape_path = resolve(base_dir, *v);
@@ -210,6 +219,46 @@ Result<SceneBody> read_body(const Json& value, const Where& where, const Scene& 
     b.impact = *v;
   }
   return b;
+}
+
+// A body's "array": {"count": [nx, ny, nz], "spacing": [dx, dy, dz]} makes nx * ny * nz copies
+// named "<name>.<k>" (k from 0, x fastest), each moved by (i dx, j dy, l dz). Without it, the body.
+Result<std::vector<SceneBody>> read_array_copies(const Json& value, const Where& where, const SceneBody& body) {
+  const Json* ja = value.is_object() && value.contains("array") ? &value.at("array") : nullptr;
+  if (!ja) return std::vector<SceneBody>{body};
+  const Where w = where.key("array");
+  ObjectReader r(*ja, w);
+  if (!r.status().ok()) return w.error("expected {\"count\": [nx, ny, nz], \"spacing\": [dx, dy, dz]}");
+  const Json* jc = r.get("count");
+  const Json* jsp = r.get("spacing");
+  SHATTER_TRY(known, r.finish());
+  if (!jc) return w.key("count").error("missing; expected [nx, ny, nz], copies along x, y and z");
+  if (!jsp) return w.key("spacing").error("missing; expected [dx, dy, dz], m between copies");
+  SHATTER_TRY(arr, json_input::read_array(*jc, w.key("count")));
+  if ((*arr)->size() != 3) return w.key("count").error("expected three integers [nx, ny, nz]");
+  std::array<std::int64_t, 3> n{};
+  for (std::size_t k = 0; k < 3; ++k) {
+    SHATTER_TRY(v, json_input::read_integer((**arr)[k], w.key("count").index(k)));
+    if (*v < 1 || *v > static_cast<std::int64_t>(kMaxSceneBodies))
+      return w.key("count").index(k).error("expected an integer in [1, " + std::to_string(kMaxSceneBodies) + "]");
+    n[k] = *v;
+  }
+  if (n[0] * n[1] * n[2] > static_cast<std::int64_t>(kMaxSceneBodies))
+    return w.key("count").error("more than " + std::to_string(kMaxSceneBodies) + " copies");
+  SHATTER_TRY(spacing, json_input::read_vec3(*jsp, w.key("spacing")));
+  std::vector<SceneBody> out;
+  for (std::int64_t l = 0; l < n[2]; ++l)
+    for (std::int64_t j = 0; j < n[1]; ++j)
+      for (std::int64_t i = 0; i < n[0]; ++i) {
+        SceneBody c = body;
+        c.name = body.name + "." + std::to_string(out.size());
+        const Vec3 shift(static_cast<double>(i) * spacing->x(), static_cast<double>(j) * spacing->y(),
+                         static_cast<double>(l) * spacing->z());
+        c.position += shift;
+        if (c.height) *c.height += shift.y();
+        out.push_back(std::move(c));
+      }
+  return out;
 }
 
 Result<SceneAction> read_action(const Json& value, const Where& where, const std::vector<SceneBody>& bodies) {
@@ -386,9 +435,14 @@ Result<Scene> parse_scene(std::string_view text, const std::string& file, const 
     if ((*arr)->empty()) return w.error("expected at least one body");
     for (std::size_t i = 0; i < (*arr)->size(); ++i) {
       SHATTER_TRY(b, read_body((**arr)[i], w.index(i), scene, materials, base_dir, i));
-      for (const SceneBody& other : scene.bodies)
-        if (other.name == b->name) return w.index(i).key("name").error("a second body named \"" + b->name + "\"");
-      scene.bodies.push_back(std::move(*b));
+      SHATTER_TRY(copies, read_array_copies((**arr)[i], w.index(i), *b));
+      for (SceneBody& copy : *copies) {
+        for (const SceneBody& other : scene.bodies)
+          if (other.name == copy.name) return w.index(i).key("name").error("a second body named \"" + copy.name + "\"");
+        if (scene.bodies.size() >= kMaxSceneBodies)
+          return w.index(i).error("more than " + std::to_string(kMaxSceneBodies) + " bodies in the scene");
+        scene.bodies.push_back(std::move(copy));
+      }
     }
   }
   if (const Json* ja = r.get("actions")) {
@@ -424,8 +478,9 @@ Result<Scene> parse_scene(std::string_view text, const std::string& file, const 
         return w.key("surfaces").error("expected \"ply\", \"obj\", \"stl\" or \"\" (none), got \"" + *v + "\"");
       scene.output.surfaces = *v;
     }
-    for (const auto& [key, target] : {std::pair{"vtu", &scene.output.vtu}, std::pair{"events", &scene.output.events},
-                                      std::pair{"summary", &scene.output.summary}})
+    for (const auto& [key, target] :
+         {std::pair{"vtu", &scene.output.vtu}, std::pair{"gltf", &scene.output.gltf},
+          std::pair{"events", &scene.output.events}, std::pair{"summary", &scene.output.summary}})
       if (const Json* j = orr.get(key)) {
         SHATTER_TRY(v, json_input::read_bool(*j, w.key(key)));
         *target = *v;
@@ -451,7 +506,8 @@ Result<SceneWorld> build_scene(const Scene& scene) {
   for (std::size_t i = 0; i < scene.bodies.size(); ++i) {
     const SceneBody& b = scene.bodies[i];
     const std::string what = scene.file + ": body \"" + b.name + "\"";
-    const std::string key = b.mesh_path.empty() ? b.shape_path + "@" + std::to_string(b.refine) : b.mesh_path;
+    const std::string key =
+        b.mesh_path.empty() ? b.shape_path + b.shape_text + "@" + std::to_string(b.refine) : b.mesh_path;
     std::shared_ptr<const TetMesh> mesh = meshes[key];
     if (!mesh) {
       if (!b.mesh_path.empty()) {
@@ -459,7 +515,11 @@ Result<SceneWorld> build_scene(const Scene& scene) {
         if (!read) return make_error(what + ": " + read.error().to_string());
         mesh = std::make_shared<const TetMesh>(std::move(read->mesh));
       } else {
-        auto shape = read_shape_json(b.shape_path);
+        auto shape = b.shape_text.empty()
+                         ? read_shape_json(b.shape_path)
+                         : parse_shape_json(b.shape_text, b.shape_path,
+                                            {.base_dir = std::filesystem::path(scene.file).parent_path().string(),
+                                             .load_surface = {}});
         if (!shape) return make_error(what + ": " + shape.error().to_string());
         MeshShapeDef def;
         def.stuffing.edge_length = shape->edge_length / std::cbrt(b.refine);
@@ -654,13 +714,16 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
   const double dt = scene.world.time_step;
   const auto total_steps = static_cast<std::int64_t>(std::llround(duration / dt));
   const bool write = !options.out_dir.empty();
-  const bool frames = write && scene.output.vtu && scene.output.frames_per_second > 0;
+  // Frames: the ParaView series (and surfaces) and the glTF animation sample the same times.
+  const bool frames = write && (scene.output.vtu || scene.output.gltf) && scene.output.frames_per_second > 0;
+  const bool vtu = frames && scene.output.vtu;
+  GltfRecorder gltf;
   std::vector<std::string> event_lines;
   std::size_t frame_count = 0;
   double last_frame_time = -1;  // s
   if (write) {
     std::error_code ec;
-    std::filesystem::create_directories(std::filesystem::path(options.out_dir) / (frames ? "frames" : ""), ec);
+    std::filesystem::create_directories(std::filesystem::path(options.out_dir) / (vtu ? "frames" : ""), ec);
     if (ec) return make_error(options.out_dir + ": cannot create the output folder: " + ec.message());
   }
   // Names of bodies for the summary: the scene's, and "<parent>.<k>" for fragments.
@@ -684,16 +747,19 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
     const double t = w.time();
     if (!force && t + 0.5 * dt < next_frame) return {};
     const auto t0 = Clock::now();
-    char name[64];
-    std::snprintf(name, sizeof name, "frames/frame_%06zu.vtu", frame_count);
-    SHATTER_TRY(ok, write_frame(out + "/" + name, w));
-    SHATTER_TRY(listed, series.add(t, name));
-    if (!scene.output.surfaces.empty()) {
-      char surface_name[64];
-      std::snprintf(surface_name, sizeof surface_name, "frames/surface_%06zu.%s", frame_count,
-                    scene.output.surfaces.c_str());
-      SHATTER_TRY(wrote, write_surfaces(out + "/" + surface_name, w));
+    if (vtu) {
+      char name[64];
+      std::snprintf(name, sizeof name, "frames/frame_%06zu.vtu", frame_count);
+      SHATTER_TRY(ok, write_frame(out + "/" + name, w));
+      SHATTER_TRY(listed, series.add(t, name));
+      if (!scene.output.surfaces.empty()) {
+        char surface_name[64];
+        std::snprintf(surface_name, sizeof surface_name, "frames/surface_%06zu.%s", frame_count,
+                      scene.output.surfaces.c_str());
+        SHATTER_TRY(wrote, write_surfaces(out + "/" + surface_name, w));
+      }
     }
+    if (scene.output.gltf) gltf.add_frame(w);
     ++frame_count;
     last_frame_time = t;
     next_frame = static_cast<double>(frame_count) / scene.output.frames_per_second;
@@ -738,7 +804,13 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
       SHATTER_TRY(last, maybe_frame(true));
     }
     SHATTER_TRY(listed, write_events());
-    if (frames) s.files.push_back(out + "/scene.pvd");
+    if (vtu) s.files.push_back(out + "/scene.pvd");
+    if (frames && scene.output.gltf) {
+      const auto t0 = Clock::now();
+      SHATTER_TRY(glb, write_file_atomic(out + "/scene.glb", gltf.glb()));
+      s.output_ms += ms_since(t0);
+      s.files.push_back(out + "/scene.glb");
+    }
     if (scene.output.events) s.files.push_back(out + "/events.jsonl");
     if (scene.output.summary) {
       Json bodies = Json::array();

@@ -888,6 +888,7 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
   rec.impulse = r.impulse;
   rec.contact_time = r.contact_time;
   rec.force = r.force;
+  rec.collision_radius = r.collision_radius;
   rec.max_principal_stress = r.max_principal_stress;
   rec.max_von_mises = r.max_von_mises;
   rec.converged = r.solve.converged;
@@ -1014,6 +1015,18 @@ Result<void> World::press(BodyId id, const Vec3& point, const Vec3& force, doubl
                     .radius = radius,
                     .remaining = std::max(duration, settings_.time_step)});
   return {};
+}
+
+Result<Index> World::slice(BodyId id, const Vec3& point, const Vec3& normal) {
+  SHATTER_TRY(slot, live_slot(id, "slice"));
+  const Body& b = bodies_[*slot];
+  if (!b.model || b.type != BodyType::dynamic) return make_error("slice: only dynamic tet bodies can be cut");
+  SHATTER_TRY(r, slice_body(*b.model, impact_state(b), point, normal, impact_settings(b, nullptr)));
+  if (r->cracks.empty()) return Index{0};
+  const auto pieces = static_cast<Index>(r->children.size());
+  apply_impact(*slot, -1, *r);
+  forget_removed();
+  return pieces;
 }
 
 void World::push_tools() {
