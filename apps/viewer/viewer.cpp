@@ -94,7 +94,7 @@ Result<std::vector<ScriptStep>> read_script(const std::string& path) {
     if (st.action == "click" && !(s.contains("body") && s["body"].is_string()) &&
         !(s.contains("x") && s["x"].is_number() && s.contains("y") && s["y"].is_number()))
       return make_error(where + ": a click needs \"body\": <name> or \"x\" and \"y\" (pixels)");
-    for (const char* key : {"impulse", "speed", "force", "count"})
+    for (const char* key : {"impulse", "speed", "force", "radius", "count"})
       if (s.contains(key) && !s[key].is_number()) return make_error(where + "." + key + ": expected a number");
     for (const char* key : {"tool", "path", "view"})
       if (s.contains(key) && !s[key].is_string()) return make_error(where + "." + key + ": expected a string");
@@ -163,6 +163,7 @@ class Viewer {
   // Tool parameters.
   double hammer_impulse_ = 20;  // N s
   double hammer_speed_ = 8;     // m/s
+  double hammer_radius_ = 0;    // m (0: Hertz's patch)
   double press_force_ = 2000;   // N
   double press_radius_ = 0.02;  // m
   double throw_speed_ = 6;      // m/s
@@ -375,7 +376,7 @@ void Viewer::tool_down(double x, double y) {
       break;
     case Tool::hammer: {
       const Vec3 impulse = hammer_impulse_ * dir;
-      if (auto ok = w.strike(hit.body, hit.point, impulse, hammer_speed_); !ok)
+      if (auto ok = w.strike(hit.body, hit.point, impulse, hammer_speed_, hammer_radius_); !ok)
         log("hammer: " + ok.error().message);
       else
         log(fmt::format("{:.3f} s  hammer on body {}: {:.3g} N s at {:.3g} m/s", w.time(), hit.body.index,
@@ -585,6 +586,10 @@ void Viewer::ui() {
     case Tool::hammer:
       input("impulse, N s", hammer_impulse_, 0.1, 500, "%.3g");
       input("hammer speed, m/s", hammer_speed_, 0.5, 50, "%.3g");
+      {
+        float r = static_cast<float>(hammer_radius_ * 1000);
+        if (ImGui::SliderFloat("face radius, mm (0: Hertz)", &r, 0.0F, 100.0F, "%.1f")) hammer_radius_ = r / 1000.0;
+      }
       break;
     case Tool::press:
       input("force, N", press_force_, 1, 1e6, "%.3g");
@@ -728,6 +733,8 @@ void Viewer::run_script() {
       if (s.args.contains("impulse")) hammer_impulse_ = s.args["impulse"].get<double>();
       if (s.args.contains("speed")) hammer_speed_ = s.args["speed"].get<double>();
       if (s.args.contains("force")) press_force_ = s.args["force"].get<double>();
+      if (s.args.contains("radius"))
+        (tool_ == Tool::press ? press_radius_ : hammer_radius_) = s.args["radius"].get<double>();
     } else if (s.action == "click") {
       // At a pixel, or at the projected centre of a scene body.
       double x = 0, y = 0;

@@ -482,6 +482,7 @@ TEST(Impacts, HammerBreaksAVaseOnlyWhenHardEnough) {
   auto id = w.add_body(vase(), {});
   ASSERT_OK(id);
   EXPECT_FALSE(w.strike(*id, Vec3::Zero(), Vec3(1, 0, 0), 0).ok());
+  EXPECT_FALSE(w.strike(*id, Vec3::Zero(), Vec3(1, 0, 0), 1, -0.1).ok());
   EXPECT_FALSE(w.press(*id, Vec3::Zero(), Vec3(1, 0, 0), -1, 1).ok());
   EXPECT_FALSE(w.press(BodyId{7, 0}, Vec3::Zero(), Vec3(1, 0, 0), 0, 1).ok());
 }
@@ -520,6 +521,27 @@ TEST(Impacts, PressDentsClayWhileHeld) {
 
 namespace shatter {
 namespace {
+
+TEST(Impacts, AWiderHammerFaceSpreadsTheBlow) {
+  // The same blow with a point-like face (Hertz's patch) and with a face of 4 cm: the wider face
+  // spreads the same force over more of the surface, so the peak stress is lower.
+  std::vector<double> stress;
+  for (const double radius : {0.0, 0.04}) {
+    World w({.enable_impacts = true});
+    w.add_plane({.normal = Vec3::UnitY(), .offset = 0});
+    auto id = w.add_body(vase(), {.rigid = drop_pose(*vase(), 0.0005, Quat::Identity(), 1.0 / 60, 0)});
+    ASSERT_OK(id);
+    for (int i = 0; i < 40; ++i) w.step();
+    const Vec3 belly = w.rigid_state(*id).position + Vec3(-0.088, 0, 0);
+    ASSERT_OK(w.strike(*id, belly, Vec3(0.5, 0, 0), 1.0, radius));
+    w.step();
+    ASSERT_EQ(w.events().impacts.size(), 1U);
+    stress.push_back(w.events().impacts[0].max_principal_stress);
+    std::printf("hammer face %.0f mm: force %.3g N, stress %.3g Pa\n", radius * 1000, w.events().impacts[0].force,
+                stress.back());
+  }
+  EXPECT_LT(stress[1], 0.8 * stress[0]);
+}
 
 TEST(Impacts, SliceCutsABodyInTwoThatFlyApart) {
   const TetMesh m = make_box_mesh({.min = Vec3(-0.2, 0.3, -0.05), .max = Vec3(0.2, 0.4, 0.05), .cells = {12, 3, 3}});

@@ -54,7 +54,7 @@ struct SceneAction {
   bool point_given = false;    ///< false: the body's surface point nearest to the side the vector comes from
   Vec3 vector = Vec3::Zero();  ///< strike and impulse: N s; press: N
   double speed = 0;            ///< strike: the hammer's speed, m/s
-  double radius = 0;           ///< press: m
+  double radius = 0;           ///< press, strike: the smallest patch radius, m
   double duration = 0;         ///< press: s
 };
 

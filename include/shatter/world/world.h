@@ -262,9 +262,11 @@ class World {
   // Tools (the paper's interactive tools, through the same analysis as impacts).
   /// A hammer blow: the impulse J (N s, world) at world point `point` changes the body's motion
   /// now, and at the end of the next step the body is analysed as an impact of |J| along J at
-  /// `speed` (m/s, the hammer's): it may dent or break like a body that hit something. Errors: an
-  /// invalid or removed id, non-finite values, a speed <= 0.
-  Result<void> strike(BodyId id, const Vec3& point, const Vec3& impulse, double speed);
+  /// `speed` (m/s, the hammer's): it may dent or break like a body that hit something. `radius`
+  /// (m) is the hammer's face: the load is spread over at least that radius (0: the contact
+  /// patch of Hertz's theory alone). Errors: an invalid or removed id, non-finite values, a speed
+  /// <= 0, a negative radius.
+  Result<void> strike(BodyId id, const Vec3& point, const Vec3& impulse, double speed, double radius = 0);
   /// A press: `force` (N, world, pushing into the body) at world point `point`, spread over at
   /// least `radius` (m), held for `duration` seconds (at least one step). Each step it pushes the
   /// body by force x step and, when the body is breakable, analyses it under that force: clay dents
@@ -438,7 +440,7 @@ class World {
     Vec3 local_point = Vec3::Zero();  ///< in the body frame, m
     Vec3 vector = Vec3::Zero();       ///< strike: impulse, N s; press: force, N (world)
     double speed = 0;                 ///< strike: m/s
-    double radius = 0;                ///< press: m
+    double radius = 0;                ///< press, strike: smallest patch radius, m
     double remaining = 0;             ///< press: s left
   };
   std::vector<Tool> tools_;  ///< in the order given

@@ -323,16 +323,17 @@ Result<SceneAction> read_action(const Json& value, const Where& where, const std
   }
   const Json* jr = r.get("radius");
   const Json* jd = r.get("duration");
+  if (jr) {
+    if (a.kind == SceneAction::Kind::impulse) return where.key("radius").error("only a press or a strike has a radius");
+    SHATTER_TRY(s, read_in_range(*jr, where.key("radius"), 0, 1e3, "a radius >= 0 (m)"));
+    a.radius = *s;
+  }
   if (press) {
-    if (jr) {
-      SHATTER_TRY(s, read_in_range(*jr, where.key("radius"), 0, 1e3, "a radius >= 0 (m)"));
-      a.radius = *s;
-    }
     if (!jd) return where.key("duration").error("missing; expected how long the press is held, s");
     SHATTER_TRY(s, read_in_range(*jd, where.key("duration"), 0, kMaxDuration, "a duration >= 0 (s)"));
     a.duration = *s;
-  } else if (jr || jd) {
-    return where.key(jr ? "radius" : "duration").error("only a press has a radius and a duration");
+  } else if (jd) {
+    return where.key("duration").error("only a press has a duration");
   }
   return a;
 }
@@ -696,7 +697,7 @@ Result<void> apply_due_actions(const Scene& scene, const SceneWorld& built, std:
     }
     Result<void> done;
     switch (a.kind) {
-      case SceneAction::Kind::strike: done = w.strike(id, point, a.vector, a.speed); break;
+      case SceneAction::Kind::strike: done = w.strike(id, point, a.vector, a.speed, a.radius); break;
       case SceneAction::Kind::press: done = w.press(id, point, a.vector, a.radius, a.duration); break;
       case SceneAction::Kind::impulse: done = w.apply_impulse(id, a.vector, point); break;
     }

@@ -988,17 +988,19 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
   events_.impacts.push_back(rec);
 }
 
-Result<void> World::strike(BodyId id, const Vec3& point, const Vec3& impulse, double speed) {
+Result<void> World::strike(BodyId id, const Vec3& point, const Vec3& impulse, double speed, double radius) {
   SHATTER_TRY(slot, live_slot(id, "strike"));
-  if (!point.allFinite() || !impulse.allFinite() || !std::isfinite(speed) || !(speed > 0))
-    return make_error("strike: the point and impulse must be finite and the speed > 0");
+  if (!point.allFinite() || !impulse.allFinite() || !std::isfinite(speed) || !(speed > 0) || !std::isfinite(radius) ||
+      radius < 0)
+    return make_error("strike: the point and impulse must be finite, the speed > 0 and the radius >= 0");
   SHATTER_TRY(pushed, apply_impulse(id, impulse, point));
   const Body& b = bodies_[*slot];
   tools_.push_back({.body = *slot,
                     .strike = true,
                     .local_point = b.rigid.orientation.conjugate() * (point - b.rigid.position),
                     .vector = impulse,
-                    .speed = speed});
+                    .speed = speed,
+                    .radius = radius});
   return {};
 }
 
@@ -1058,6 +1060,9 @@ void World::process_tools() {
       Result<ImpactResult> result = ImpactResult{};
       if (t.strike) {
         settings.min_approach_speed = 0;
+        // The hammer's face: a floor on the patch radius (a fraction of the body's radius there).
+        if (t.radius > 0 && b.shape && b.shape->radius > 0)
+          settings.min_patch_radius = std::max(settings.min_patch_radius, t.radius / b.shape->radius);
         const ImpactContact contact{.point = point,
                                     .normal = t.vector.normalized(),
                                     .normal_impulse = t.vector.norm(),
