@@ -348,6 +348,24 @@ TEST(CmdRender, WritesFramesAndRefusesBadArguments) {
   EXPECT_EQ(run_command(cli + " render " + scene + " --out /proc/none --time 0.1").status, 4);
 }
 
+TEST(CmdRender, MakesAnMp4WhenFfmpegIsInstalled) {
+  SHATTER_REQUIRE_TOOL(!cli_path().empty(), "the shatter CLI");
+  REQUIRE_GL();
+  // ffmpeg is optional (the frames are the output; the MP4 is a convenience): skipped without it.
+  if (run_command("command -v ffmpeg >/dev/null 2>&1 && command -v ffprobe >/dev/null 2>&1").status != 0)
+    GTEST_SKIP() << "ffmpeg is not installed";
+  TempDir dir;
+  const std::string scene = std::string(SHATTER_SOURCE_DIR) + "/scenes/vase_drop.json";
+  auto r = run_command(cli_path() + " render " + scene + " --out " + dir.path().string() +
+                       " --time 0.3 --fps 10 --size 96x64");
+  ASSERT_EQ(r.status, 0) << r.output;
+  auto probe = run_command("ffprobe -v error -show_entries stream=codec_name,width,height,nb_frames -of csv=p=0 " +
+                           dir.file("render.mp4"));
+  ASSERT_EQ(probe.status, 0) << probe.output;
+  EXPECT_NE(probe.output.find("h264,96,64,4"), std::string::npos) << probe.output;
+  EXPECT_FALSE(std::filesystem::exists(dir.file(".render.mp4.tmp.mp4")));
+}
+
 }  // namespace
 }  // namespace shatter::render
 

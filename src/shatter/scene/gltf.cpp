@@ -91,7 +91,7 @@ std::vector<float> vertex_normals(const GltfRecorder::Version& v) {
   }
   std::vector<float> out;
   out.reserve(n.size() * 3);
-  for (Vec3 x : n) push3(out, x.squaredNorm() > 0 ? Vec3(x.normalized()) : Vec3::UnitY());
+  for (const Vec3& x : n) push3(out, x.squaredNorm() > 0 ? Vec3(x.normalized()) : Vec3::UnitY());
   return out;
 }
 
@@ -155,6 +155,7 @@ std::string GltfRecorder::glb() const {
   Json channels = Json::array(), samplers = Json::array();
   std::map<std::string, int> known_materials;
   std::vector<float> times;
+  times.reserve(times_.size());
   for (const double t : times_) times.push_back(static_cast<float>(t));
   const int time_accessor = times.empty() ? -1 : b.floats(times, 1, true);
 
