@@ -31,17 +31,42 @@ void remove_stale_fragments(OutputBatch& batch, const std::filesystem::path& dir
   }
 }
 
+// Far from the origin (map coordinates: 1e7 m) a double keeps too few digits for displacements of
+// micrometres: the solve then runs about the mesh's box centre, and the results are moved back.
+// Only then: near the origin the positions are used as given, bit for bit.
+Vec3 local_origin(const TetMesh& mesh) {
+  Aabb box;
+  for (const Vec3& p : mesh.positions) box.extend(p);
+  if (mesh.positions.empty()) return Vec3::Zero();
+  const Vec3 centre = 0.5 * (box.min + box.max);
+  const double size = (box.max - box.min).norm();
+  return centre.norm() > 100 * size ? centre : Vec3::Zero();
+}
+
+void shift(std::vector<Vec3>& points, const Vec3& by) {
+  for (Vec3& p : points) p += by;
+}
+
 }  // namespace
 
-Result<StaticAnalysis> run_static_analysis(const StaticCase& c, const TetMesh& mesh,
+Result<StaticAnalysis> run_static_analysis(const StaticCase& c, const TetMesh& world_mesh,
                                            const StaticAnalysisOptions& options) {
   StaticAnalysis a;
-  // Anchors, loads, model.
+  // Anchors and loads are found on the mesh as given; the model and the solve use local positions.
   const auto t_setup = Clock::now();
-  SHATTER_TRY(resolved, resolve_static_case(c, mesh));
+  SHATTER_TRY(resolved, resolve_static_case(c, world_mesh));
   a.resolved = std::move(*resolved);
+  const Vec3 origin = local_origin(world_mesh);
+  const bool moved = origin != Vec3::Zero();
+  TetMesh local_copy;
+  if (moved) {
+    local_copy = world_mesh;
+    shift(local_copy.positions, -origin);
+  }
+  const TetMesh& mesh = moved ? local_copy : world_mesh;
   a.model = make_fem_model(mesh, c.material, c.model);
   a.problem = make_static_problem(c, a.resolved);
+  if (moved) shift(a.problem.anchor_positions, -origin);  // prescribed positions, as the mesh
   a.solver_options = make_solver_options(c.solver);
   if (a.problem.gravity)
     for (double m : a.model.node_mass) a.gravity_load += m * a.problem.gravity_vector;
@@ -60,6 +85,20 @@ Result<StaticAnalysis> run_static_analysis(const StaticCase& c, const TetMesh& m
     const auto t_frac = Clock::now();
     a.fracture = fracture_with_stress(mesh, a.model, a.deformed, std::move(stress), c.fracture);
     a.fracture_ms = ms_since(t_frac);
+  }
+  if (moved) {  // back to the mesh's coordinates (displacements and stresses do not move)
+    shift(a.deformed, origin);
+    if (a.fracture) {
+      FractureResult& f = *a.fracture;
+      shift(f.mesh.positions, origin);
+      shift(f.deformed, origin);
+      shift(f.plastic.rest_positions, origin);
+      for (Fragment& fr : f.fragments) {
+        shift(fr.mesh.positions, origin);
+        fr.mass.center += origin;
+      }
+      for (CrackEvent& e : f.events) e.plan.origin += origin;
+    }
   }
   return a;
 }
