@@ -742,7 +742,8 @@ void Viewer::run_script() {
         const std::string name = s.args["body"].get<std::string>();
         std::size_t i = 0;
         while (i < scene_.bodies.size() && scene_.bodies[i].name != name) ++i;
-        if (i == scene_.bodies.size() || w.removed(built_->bodies[i])) {
+        if (i == scene_.bodies.size() || built_->bodies[i].index < 0 || !w.valid(built_->bodies[i]) ||
+            w.removed(built_->bodies[i])) {
           log("script: no live body named " + name);
           continue;
         }
@@ -763,7 +764,8 @@ void Viewer::run_script() {
         const std::string name = s.args["across"].get<std::string>();
         std::size_t i = 0;
         while (i < scene_.bodies.size() && scene_.bodies[i].name != name) ++i;
-        if (i == scene_.bodies.size() || w.removed(built_->bodies[i])) {
+        if (i == scene_.bodies.size() || built_->bodies[i].index < 0 || !w.valid(built_->bodies[i]) ||
+            w.removed(built_->bodies[i])) {
           log("script: no live body named " + name);
           continue;
         }

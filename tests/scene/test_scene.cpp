@@ -231,3 +231,61 @@ TEST(SceneRun, CliRunsTheBundledVaseDrop) {
 
 }  // namespace
 }  // namespace shatter
+
+namespace shatter {
+namespace {
+
+TEST(SceneRun, ABodyAppearsWhenItsTimeComes) {
+  const std::string text = R"({
+    "bodies": [
+      {"name": "first", "mesh": ")" +
+                           std::string(SHATTER_SOURCE_DIR) + R"(/assets/meshes/cinder_block.msh",
+       "material": "concrete", "height": 0.0005},
+      {"name": "later", "mesh": ")" +
+                           std::string(SHATTER_SOURCE_DIR) + R"(/assets/meshes/cinder_block.msh",
+       "material": "concrete", "position": [1, 0, 0], "height": 0.05, "appear": 0.5, "velocity": [0.5, 0, 0]}
+    ],
+    "actions": [{"time": 0.2, "type": "impulse", "body": "later", "impulse": [0, 5, 0]}]
+  })";
+  auto scene = parse_scene(text, "appear.json");
+  ASSERT_OK(scene);
+  EXPECT_EQ(scene->bodies[1].appear, 0.5);
+  auto built = build_scene(*scene);
+  ASSERT_OK(built);
+  World& w = *built->world;
+  EXPECT_EQ(built->bodies[1].index, -1);
+  std::size_t next = 0;
+  Index before = 0;
+  while (w.time() < 0.45) {
+    ASSERT_OK(apply_due_actions(*scene, *built, next));  // the impulse at 0.2 s finds no body: skipped
+    w.step();
+    before = w.live_body_count();
+  }
+  EXPECT_EQ(before, 2);  // the ground and the first block
+  while (w.time() < 0.55) {
+    ASSERT_OK(apply_due_actions(*scene, *built, next));
+    w.step();
+  }
+  ASSERT_GE(built->bodies[1].index, 0);
+  EXPECT_EQ(w.live_body_count(), 3);
+  const RigidState& r = w.rigid_state(built->bodies[1]);
+  EXPECT_NEAR(r.linear_velocity.x(), 0.5, 1e-9);  // its own velocity (gravity acts along y)
+  EXPECT_LT(r.linear_velocity.y(), 0.0);
+  EXPECT_GT(r.position.x(), 1.0);
+  // A run names it in the summary.
+  test::TempDir dir;
+  auto run = run_scene(*scene, {.out_dir = dir.path().string(), .duration = 0.7});
+  ASSERT_OK(run);
+  EXPECT_EQ(run->bodies, 2);
+  std::ifstream in(dir.file("summary.json"));
+  const auto summary = nlohmann::json::parse(in);
+  bool named = false;
+  for (const auto& b : summary["bodies"]) named |= b["name"] == "later";
+  EXPECT_TRUE(named);
+  auto bad = parse_scene(R"({"bodies": [{"mesh": "a.msh", "material": "glass", "appear": -1}]})", "bad.json");
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.error().to_string().find("bodies[0].appear"), std::string::npos) << bad.error().to_string();
+}
+
+}  // namespace
+}  // namespace shatter

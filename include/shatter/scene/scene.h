@@ -42,6 +42,9 @@ struct SceneBody {
   SurfaceMaterial surface;
   bool breakable = true;
   ImpactSettings impact;  ///< the scene's impact settings with this body's overrides
+  /// The body enters the world at this time, s, as placed (a drop or a throw later in the run);
+  /// 0: from the start.
+  double appear = 0;
 };
 
 /// Something that happens at a time.
@@ -95,17 +98,26 @@ Result<Scene> read_scene(const std::string& path);
 /// A scene built into a world.
 struct SceneWorld {
   std::unique_ptr<World> world;
-  std::vector<BodyId> bodies;  ///< the id of each scene body
-  BodyId ground;               ///< index -1 without a ground
+  /// The id of each scene body; index -1 for a body that has not appeared yet.
+  std::vector<BodyId> bodies;
+  BodyId ground;  ///< index -1 without a ground
+  /// What a body that appears later is added with (index into bodies; empty model: added).
+  struct Pending {
+    std::size_t body = 0;
+    std::shared_ptr<const BodyModel> model;
+    BodyDef def;
+  };
+  std::vector<Pending> pending;
 };
 /// Read the meshes (or mesh the shapes), make the models and add everything to a new world.
 /// Errors name the body and its file.
 Result<SceneWorld> build_scene(const Scene& scene);
 
-/// Apply the scene's actions due by the end of the next step, from `next_action` on (it moves past
-/// them): run_scene, `shatter render` and the viewer step a scene this way. An action on a body
-/// that broke before is skipped. Errors: an action the world refuses (names the action's time).
-Result<void> apply_due_actions(const Scene& scene, const SceneWorld& built, std::size_t& next_action);
+/// Add the bodies due to appear by the end of the next step, then apply the scene's actions due by
+/// then, from `next_action` on (it moves past them): run_scene, `shatter render` and the viewer
+/// step a scene this way. An action on a body that broke before, or has not appeared, is skipped.
+/// Errors: an action or a body the world refuses (names the time).
+Result<void> apply_due_actions(const Scene& scene, SceneWorld& built, std::size_t& next_action);
 
 /// Settings of run_scene.
 struct RunOptions {

@@ -133,7 +133,7 @@ Result<SceneBody> read_body(const Json& value, const Where& where, const Scene& 
   b.impact = scene.world.impact;
   for (const char* key :
        {"name", "mesh", "shape", "refine", "material", "model", "type", "position", "rotation", "height", "velocity",
-        "angular_velocity", "friction", "restitution", "breakable", "impact", "array"})
+        "angular_velocity", "friction", "restitution", "breakable", "impact", "array", "appear"})
     (void)r.get(key);
   SHATTER_TRY(known, r.finish());
   if (const Json* j = r.get("name")) {
@@ -217,6 +217,10 @@ Result<SceneBody> read_body(const Json& value, const Where& where, const Scene& 
   if (const Json* j = r.get("impact")) {
     SHATTER_TRY(v, read_impact(*j, where.key("impact"), b.impact));
     b.impact = *v;
+  }
+  if (const Json* j = r.get("appear")) {
+    SHATTER_TRY(v, read_in_range(*j, where.key("appear"), 0, kMaxDuration, "a time >= 0 (s)"));
+    b.appear = *v;
   }
   return b;
 }
@@ -552,7 +556,13 @@ Result<SceneWorld> build_scene(const Scene& scene) {
                 .surface = b.surface,
                 .breakable = b.breakable,
                 .impact = std::make_shared<const ImpactSettings>(b.impact)};
-    auto id = w.add_body(std::make_shared<const BodyModel>(std::move(*model)), def);
+    auto shared = std::make_shared<const BodyModel>(std::move(*model));
+    if (b.appear > 0) {  // added by apply_due_actions when its time comes
+      out.bodies.push_back(BodyId{});
+      out.pending.push_back({.body = i, .model = std::move(shared), .def = def});
+      continue;
+    }
+    auto id = w.add_body(std::move(shared), def);
     if (!id) return make_error(what + ": " + id.error().to_string());
     out.bodies.push_back(*id);
   }
@@ -677,13 +687,23 @@ std::string hex64(std::uint64_t v) {
 
 }  // namespace
 
-Result<void> apply_due_actions(const Scene& scene, const SceneWorld& built, std::size_t& next_action) {
+Result<void> apply_due_actions(const Scene& scene, SceneWorld& built, std::size_t& next_action) {
   World& w = *built.world;
   const double dt = w.settings().time_step;
+  for (const SceneWorld::Pending& p : built.pending) {
+    BodyId& id = built.bodies[p.body];
+    if (id.index >= 0 && w.valid(id)) continue;  // there already
+    if (!(scene.bodies[p.body].appear < w.time() + 0.5 * dt)) continue;
+    auto added = w.add_body(p.model, p.def);
+    if (!added)
+      return make_error(scene.file + ": body \"" + scene.bodies[p.body].name + "\" at " +
+                        Json(scene.bodies[p.body].appear).dump() + " s: " + added.error().message);
+    id = *added;
+  }
   while (next_action < scene.actions.size() && scene.actions[next_action].time < w.time() + 0.5 * dt) {
     const SceneAction& a = scene.actions[next_action++];
     const BodyId id = built.bodies[a.body];
-    if (w.removed(id)) continue;  // it broke before: the action has nothing to act on
+    if (id.index < 0 || !w.valid(id) || w.removed(id)) continue;  // not there yet, or broken before
     Vec3 point = a.point;
     if (!a.point_given) {  // the surface point the vector first meets
       const BodySurface surf = w.surface(id);
@@ -729,7 +749,8 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
   }
   // Names of bodies for the summary: the scene's, and "<parent>.<k>" for fragments.
   std::map<Index, std::string> names;
-  for (std::size_t i = 0; i < scene.bodies.size(); ++i) names[built->bodies[i].index] = scene.bodies[i].name;
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i)
+    if (built->bodies[i].index >= 0) names[built->bodies[i].index] = scene.bodies[i].name;
 
   const std::string out = options.out_dir;
   PvdSeries series(out + "/scene.pvd");
@@ -778,6 +799,9 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
       break;
     }
     SHATTER_TRY(acted, apply_due_actions(scene, *built, next_action));
+    for (std::size_t i = 0; i < scene.bodies.size(); ++i)  // bodies that appeared
+      if (built->bodies[i].index >= 0 && !names.contains(built->bodies[i].index))
+        names[built->bodies[i].index] = scene.bodies[i].name;
     w.step();
     ++s.steps;
     const StepStats& st = w.stats();
