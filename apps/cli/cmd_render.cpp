@@ -85,9 +85,7 @@ int run_program(const std::vector<std::string>& argv) {
 
 int render(const RenderArgs& args) {
   int width = 0, height = 0;
-  char x = 0, rest = 0;
-  if (std::sscanf(args.size.c_str(), "%d%c%d%c", &width, &x, &height, &rest) != 3 || (x != 'x' && x != 'X') ||
-      width < 16 || height < 16 || width > 8192 || height > 8192)
+  if (!parse_size(args.size, 16, 8192, width, height))
     return report_error("--size: expected WIDTHxHEIGHT, each 16..8192 (e.g. 1280x720), got \"" + args.size + "\"",
                         kExitUsage);
   if (args.view != "material" && args.view != "stress")

@@ -17,9 +17,7 @@ struct ViewArgs {
 
 int view(ViewArgs& args) {
   int width = 0, height = 0;
-  char x = 0, rest = 0;
-  if (std::sscanf(args.size.c_str(), "%d%c%d%c", &width, &x, &height, &rest) != 3 || (x != 'x' && x != 'X') ||
-      width < 64 || height < 64 || width > 8192 || height > 8192)
+  if (!parse_size(args.size, 64, 8192, width, height))
     return report_error("--size: expected WIDTHxHEIGHT, each 64..8192 (e.g. 1280x720), got \"" + args.size + "\"",
                         kExitUsage);
   args.options.width = width;

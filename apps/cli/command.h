@@ -29,6 +29,10 @@ struct Registration {
 /// Print an error message on stderr ("shatter: error: ..."). Returns `code` for convenience.
 int report_error(const std::string& message, int code);
 
+/// An image or window size "WIDTHxHEIGHT" (or "WxH" with a capital X), each in [lo, hi]. False
+/// when the text is not one.
+bool parse_size(const std::string& text, int lo, int hi, int& width, int& height);
+
 /// The bundled vase drop: scenes/vase_drop.json in the current folder, beside the source tree the
 /// program was built from, or in an installed share/shatter (`run`, `render` and `view` without a
 /// scene).

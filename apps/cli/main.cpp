@@ -38,6 +38,12 @@ std::string default_scene_path() {
   return "scenes/vase_drop.json";
 }
 
+bool parse_size(const std::string& text, int lo, int hi, int& width, int& height) {
+  char x = 0, rest = 0;
+  return std::sscanf(text.c_str(), "%d%c%d%c", &width, &x, &height, &rest) == 3 && (x == 'x' || x == 'X') &&
+         width >= lo && height >= lo && width <= hi && height <= hi;
+}
+
 int report_error(const std::string& message, int code) {
   std::fprintf(stderr, "shatter: error: %s\n", message.c_str());
   return code;

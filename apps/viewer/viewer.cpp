@@ -140,6 +140,9 @@ class Viewer {
   // Frame.
   void ui();
   void run_script();
+  /// The window pixel of a live scene body's centre of mass (scripts); logs and gives nothing when
+  /// no live body has the name.
+  std::optional<Vec2> body_on_screen(const std::string& name);
   bool screenshot(const std::string& path);
 
   ViewerOptions opt_;
@@ -717,6 +720,21 @@ bool Viewer::screenshot(const std::string& path) {
   return true;
 }
 
+std::optional<Vec2> Viewer::body_on_screen(const std::string& name) {
+  const World& w = *built_->world;
+  std::size_t i = 0;
+  while (i < scene_.bodies.size() && scene_.bodies[i].name != name) ++i;
+  if (i == scene_.bodies.size() || built_->bodies[i].index < 0 || !w.valid(built_->bodies[i]) ||
+      w.removed(built_->bodies[i])) {
+    log("script: no live body named " + name);
+    return std::nullopt;
+  }
+  int ww = 0, wh = 0;
+  glfwGetWindowSize(window_, &ww, &wh);
+  const Vec3 p = camera_.project(w.rigid_state(built_->bodies[i]).position, ww, wh);
+  return Vec2(p.x(), p.y());
+}
+
 // Script steps due at this frame. Clicks go through the same tool path as the mouse.
 void Viewer::run_script() {
   while (script_next_ < script_.size() && script_[script_next_].frame <= frame_) {
@@ -739,19 +757,10 @@ void Viewer::run_script() {
       // At a pixel, or at the projected centre of a scene body.
       double x = 0, y = 0;
       if (s.args.contains("body")) {
-        const std::string name = s.args["body"].get<std::string>();
-        std::size_t i = 0;
-        while (i < scene_.bodies.size() && scene_.bodies[i].name != name) ++i;
-        if (i == scene_.bodies.size() || built_->bodies[i].index < 0 || !w.valid(built_->bodies[i]) ||
-            w.removed(built_->bodies[i])) {
-          log("script: no live body named " + name);
-          continue;
-        }
-        int ww = 0, wh = 0;
-        glfwGetWindowSize(window_, &ww, &wh);
-        const Vec3 p = camera_.project(w.rigid_state(built_->bodies[i]).position, ww, wh);
-        x = p.x();
-        y = p.y();
+        const auto p = body_on_screen(s.args["body"].get<std::string>());
+        if (!p) continue;
+        x = p->x();
+        y = p->y();
       } else {
         x = s.args.value("x", 0.0);
         y = s.args.value("y", 0.0);
@@ -761,20 +770,11 @@ void Viewer::run_script() {
     } else if (s.action == "drag") {  // press at "from", move to "to", release (the slice tool's stroke)
       double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
       if (s.args.contains("across")) {  // a level stroke 300 px long through a body's centre on screen
-        const std::string name = s.args["across"].get<std::string>();
-        std::size_t i = 0;
-        while (i < scene_.bodies.size() && scene_.bodies[i].name != name) ++i;
-        if (i == scene_.bodies.size() || built_->bodies[i].index < 0 || !w.valid(built_->bodies[i]) ||
-            w.removed(built_->bodies[i])) {
-          log("script: no live body named " + name);
-          continue;
-        }
-        int ww = 0, wh = 0;
-        glfwGetWindowSize(window_, &ww, &wh);
-        const Vec3 c = camera_.project(w.rigid_state(built_->bodies[i]).position, ww, wh);
-        x0 = c.x() - 150;
-        x1 = c.x() + 150;
-        y0 = y1 = c.y();
+        const auto c = body_on_screen(s.args["across"].get<std::string>());
+        if (!c) continue;
+        x0 = c->x() - 150;
+        x1 = c->x() + 150;
+        y0 = y1 = c->y();
       } else {
         x0 = s.args["from"][0].get<double>();
         y0 = s.args["from"][1].get<double>();

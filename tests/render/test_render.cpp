@@ -374,37 +374,46 @@ namespace {
 
 bool have_xvfb() { return test::run_command("command -v xvfb-run >/dev/null 2>&1").status == 0; }
 
+// `shatter view` on the vase drop under Xvfb with a script (written to the folder) and `options`.
+test::CommandResult view_with_script(const test::TempDir& dir, const std::string& script, const std::string& options) {
+  const std::string path = dir.file("script.json");
+  {
+    std::ofstream out(path);
+    out << script;
+  }
+  return test::run_command("xvfb-run -a -s '-screen 0 1024x768x24' " + test::cli_path() + " view " +
+                               std::string(SHATTER_SOURCE_DIR) + "/scenes/vase_drop.json " + options + " --script " +
+                               path,
+                           true);
+}
+
+// The live bodies the script's expect_bodies_at_least printed (-1 when it printed none).
+int printed_bodies(const std::string& output) {
+  const auto at = output.find("bodies ");
+  return at == std::string::npos ? -1 : std::atoi(output.c_str() + at + 7);
+}
+
 TEST(CmdView, AHammerBlowThroughTheToolPathBreaksTheVase) {
   SHATTER_REQUIRE_TOOL(!test::cli_path().empty(), "the shatter CLI");
   SHATTER_REQUIRE_TOOL(have_xvfb(), "xvfb-run (package xvfb)");
   test::TempDir dir;
   // Paused in the air, the hammer tool is chosen and the vase clicked (the mouse's path: pick,
   // then World::strike), then it plays on; a screenshot, and the bodies are counted.
-  const std::string script = dir.file("script.json");
-  {
-    std::ofstream out(script);
-    out << R"([
+  const auto r = view_with_script(dir,
+                                  R"([
       {"frame": 0, "action": "pause"},
       {"frame": 1, "action": "tool", "tool": "hammer", "impulse": 5, "speed": 10},
       {"frame": 2, "action": "click", "body": "vase"},
       {"frame": 2, "action": "play"},
       {"frame": 8, "action": "expect_bodies_at_least", "count": 2},
-      {"frame": 8, "action": "screenshot", "path": ")"
-        << dir.file("shot.png") << R"("},
+      {"frame": 8, "action": "screenshot", "path": ")" +
+                                      dir.file("shot.png") + R"("},
       {"frame": 9, "action": "quit"}
-    ])";
-  }
-  const std::string scene = std::string(SHATTER_SOURCE_DIR) + "/scenes/vase_drop.json";
-  auto r = test::run_command("xvfb-run -a -s '-screen 0 1024x768x24' " + test::cli_path() + " view " + scene +
-                                 " --size 960x540 --fixed-step --no-vsync --script " + script,
-                             true);
+    ])",
+                                  "--size 960x540 --fixed-step --no-vsync");
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("screenshot"), std::string::npos) << r.output;
-  int bodies = 0;
-  const auto at = r.output.find("bodies ");
-  ASSERT_NE(at, std::string::npos) << r.output;
-  bodies = std::atoi(r.output.c_str() + at + 7);
-  EXPECT_GE(bodies, 2) << r.output;
+  EXPECT_GE(printed_bodies(r.output), 2) << r.output;
   auto shot = read_png(dir.file("shot.png"));
   ASSERT_OK(shot);
   EXPECT_EQ(shot->width, 960);
@@ -426,25 +435,16 @@ TEST(CmdView, ASliceStrokeCutsTheVase) {
   SHATTER_REQUIRE_TOOL(!test::cli_path().empty(), "the shatter CLI");
   SHATTER_REQUIRE_TOOL(have_xvfb(), "xvfb-run (package xvfb)");
   test::TempDir dir;
-  const std::string script = dir.file("script.json");
-  {
-    std::ofstream out(script);
-    out << R"([
+  const auto r = view_with_script(dir, R"([
       {"frame": 0, "action": "pause"},
       {"frame": 1, "action": "tool", "tool": "slice"},
       {"frame": 2, "action": "drag", "across": "vase"},
       {"frame": 3, "action": "expect_bodies_at_least", "count": 2},
       {"frame": 3, "action": "quit"}
-    ])";
-  }
-  auto r = test::run_command("xvfb-run -a -s '-screen 0 1024x768x24' " + test::cli_path() + " view " +
-                                 std::string(SHATTER_SOURCE_DIR) + "/scenes/vase_drop.json --size 640x360 --script " +
-                                 script,
-                             true);
+    ])",
+                                  "--size 640x360");
   EXPECT_EQ(r.status, 0) << r.output;
-  const auto at = r.output.find("bodies ");
-  ASSERT_NE(at, std::string::npos) << r.output;
-  EXPECT_GE(std::atoi(r.output.c_str() + at + 7), 2) << r.output;
+  EXPECT_GE(printed_bodies(r.output), 2) << r.output;
 }
 
 TEST(CmdView, WithoutADisplayItSaysSoAndPointsToRender) {
@@ -460,13 +460,7 @@ TEST(CmdView, RefusesABadScript) {
   SHATTER_REQUIRE_TOOL(!test::cli_path().empty(), "the shatter CLI");
   SHATTER_REQUIRE_TOOL(have_xvfb(), "xvfb-run (package xvfb)");
   test::TempDir dir;
-  {
-    std::ofstream out(dir.file("bad.json"));
-    out << R"([{"frame": 1, "action": "explode"}])";
-  }
-  auto r = test::run_command("xvfb-run -a " + test::cli_path() + " view " + std::string(SHATTER_SOURCE_DIR) +
-                                 "/scenes/vase_drop.json --size 320x240 --script " + dir.file("bad.json"),
-                             true);
+  const auto r = view_with_script(dir, R"([{"frame": 1, "action": "explode"}])", "--size 320x240");
   EXPECT_EQ(r.status, 3) << r.output;
   EXPECT_NE(r.output.find("unknown action \"explode\""), std::string::npos) << r.output;
 }

@@ -10,22 +10,23 @@ Vec3 Camera::eye() const {
   return target + distance * dir;
 }
 
-Mat4 Camera::view() const {
-  const Vec3 e = eye();
-  const Vec3 f = (target - e).normalized();
-  Vec3 s = f.cross(Vec3::UnitY());
-  if (s.squaredNorm() < 1e-12) s = Vec3::UnitX();
+Mat4 look_at(const Vec3& eye, const Vec3& target, const Vec3& up_hint) {
+  const Vec3 f = (target - eye).normalized();
+  Vec3 s = f.cross(up_hint);
+  if (s.squaredNorm() < 1e-12) s = f.cross(Vec3::UnitX());
   s.normalize();
   const Vec3 u = s.cross(f);
   Mat4 m = Mat4::Identity();
   m.block<1, 3>(0, 0) = s.transpose();
   m.block<1, 3>(1, 0) = u.transpose();
   m.block<1, 3>(2, 0) = -f.transpose();
-  m(0, 3) = -s.dot(e);
-  m(1, 3) = -u.dot(e);
-  m(2, 3) = f.dot(e);
+  m(0, 3) = -s.dot(eye);
+  m(1, 3) = -u.dot(eye);
+  m(2, 3) = f.dot(eye);
   return m;
 }
+
+Mat4 Camera::view() const { return look_at(eye(), target, Vec3::UnitY()); }
 
 Mat4 Camera::projection(double aspect) const {
   const double n = std::max(1e-3, distance * 0.01), fa = distance * 100 + 100;

@@ -32,6 +32,9 @@ struct Camera {
   void zoom(double factor);        ///< distance *= factor
 };
 
+/// World to eye for an eye looking at `target`, `up_hint` up (any other axis when they line up).
+Mat4 look_at(const Vec3& eye, const Vec3& target, const Vec3& up_hint);
+
 /// A camera that sees the box whole from the given direction.
 Camera frame_box(const Aabb& box, double yaw = 0.6, double pitch = 0.35, double aspect = 16.0 / 9.0);
 

@@ -42,7 +42,10 @@ DrawFrame frame_from_world(const World& world, const EventMarks* marks, BodyId s
     f.bounds.extend(box.min);
     f.bounds.extend(box.max);
   }
-  if (marks) f.marks = marks->marks();
+  if (marks) {
+    f.marks = marks->marks();
+    f.mark_keep = marks->keep();
+  }
   return f;
 }
 

@@ -61,7 +61,8 @@ struct DrawFrame {
   std::vector<DrawBody> bodies;
   std::optional<Plane> ground;
   std::vector<EventMark> marks;
-  Aabb bounds;  ///< of the bodies, m
+  double mark_keep = 1.0;  ///< s a mark lasts (EventMarks::keep): marks fade over it
+  Aabb bounds;             ///< of the bodies, m
 };
 
 /// The live tet bodies and the first plane of a world (bodies keep spans into the world: use the

@@ -250,22 +250,6 @@ void set_float(GLuint program, const char* name, double v) {
 }
 void set_int(GLuint program, const char* name, int v) { glUniform1i(glGetUniformLocation(program, name), v); }
 
-Mat4 look_at(const Vec3& eye, const Vec3& target, const Vec3& up_hint) {
-  const Vec3 f = (target - eye).normalized();
-  Vec3 s = f.cross(up_hint);
-  if (s.squaredNorm() < 1e-12) s = f.cross(Vec3::UnitX());
-  s.normalize();
-  const Vec3 u = s.cross(f);
-  Mat4 m = Mat4::Identity();
-  m.block<1, 3>(0, 0) = s.transpose();
-  m.block<1, 3>(1, 0) = u.transpose();
-  m.block<1, 3>(2, 0) = -f.transpose();
-  m(0, 3) = -s.dot(eye);
-  m(1, 3) = -u.dot(eye);
-  m(2, 3) = f.dot(eye);
-  return m;
-}
-
 Mat4 ortho(double half, double n, double f) {
   Mat4 p = Mat4::Identity();
   p(0, 0) = 1 / half;
@@ -688,8 +672,8 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
   if (options.marks && !frame.marks.empty()) {
     std::vector<FlatVertex> lines, discs;
     for (const EventMark& mk : frame.marks) {
-      const double keep = 1.0;
-      const auto alpha = static_cast<float>(std::clamp(1.0 - (frame.time - mk.time) / keep, 0.15, 1.0));
+      const auto alpha =
+          static_cast<float>(std::clamp(1.0 - (frame.time - mk.time) / std::max(frame.mark_keep, 1e-9), 0.15, 1.0));
       const Vec3& p = mk.point;
       if (mk.kind == EventMark::Kind::impact) {
         const double s = std::max(0.02, 0.04 * bodies_radius);
