@@ -71,6 +71,11 @@ Result<BodyModel> make_body_model(const TetMesh& world_mesh, const Material& mat
 /// A fresh state: the given rigid motion, no plastic strain, no stress history, an empty solver.
 BodyState make_body_state(const BodyModel& model, const RigidState& rigid = {});
 
+/// A digest of what a body's surface looks like: boundary positions and triangles, crack flags and
+/// the rest-coordinate origin (xxHash64). Equal for models that draw the same, so viewers and
+/// exporters can tell a changed model (a dent, a crack) from one seen before.
+std::uint64_t surface_hash(const BodyModel& model);
+
 /// World positions of the body's nodes at its pose (m, #nodes).
 std::vector<Vec3> world_positions(const BodyModel& model, const RigidState& rigid);
 

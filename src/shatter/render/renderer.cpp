@@ -357,15 +357,6 @@ struct Renderer::Impl {
     m = {};
   }
 
-  static std::uint64_t geometry_hash(const BodyModel& model) {
-    Hasher h;
-    h.add(std::span<const Vec3>(model.surface.positions));
-    h.add(std::span<const TriIndices>(model.surface.triangles));
-    h.add(std::span<const std::uint8_t>(model.crack_face));
-    h.add_bytes(model.material_origin.data(), 3 * sizeof(double));
-    return h.digest();
-  }
-
   // Corners with normals smoothed over neighbouring faces of the same kind that bend less than
   // ~35 degrees: a round vase looks round, crack faces and sharp edges stay sharp.
   static std::vector<float> corners(const BodyModel& model) {
@@ -410,7 +401,7 @@ struct Renderer::Impl {
 
   GpuMesh& mesh_for(const DrawBody& b) {
     GpuMesh& m = meshes[b.model];
-    const std::uint64_t gh = geometry_hash(*b.model);
+    const std::uint64_t gh = surface_hash(*b.model);
     if (m.vao == 0 || m.geometry_hash != gh) {
       release(m);
       const std::vector<float> data = corners(*b.model);

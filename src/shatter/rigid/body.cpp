@@ -1,9 +1,11 @@
 // Body model and state (see body.h).
 #include "shatter/rigid/body.h"
 
+#include <span>
 #include <string>
 #include <utility>
 
+#include "shatter/core/hash.h"
 #include "shatter/mesh/validate.h"
 
 namespace shatter {
@@ -43,6 +45,15 @@ BodyState make_body_state(const BodyModel& model, const RigidState& rigid) {
   s.plastic_strain.assign(static_cast<std::size_t>(model.mesh.num_tets()), 0.0);
   s.solver = std::make_shared<StaticSolver>();
   return s;
+}
+
+std::uint64_t surface_hash(const BodyModel& model) {
+  Hasher h;
+  h.add(std::span<const Vec3>(model.surface.positions));
+  h.add(std::span<const TriIndices>(model.surface.triangles));
+  h.add(std::span<const std::uint8_t>(model.crack_face));
+  h.add_bytes(model.material_origin.data(), 3 * sizeof(double));
+  return h.digest();
 }
 
 std::vector<Vec3> world_positions(const BodyModel& model, const RigidState& rigid) {

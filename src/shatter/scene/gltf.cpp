@@ -9,8 +9,6 @@
 #include <limits>
 #include <map>
 
-#include "shatter/core/hash.h"
-
 namespace shatter {
 namespace {
 
@@ -21,14 +19,6 @@ constexpr int kFloat = 5126;
 constexpr int kUnsignedInt = 5125;
 constexpr int kArrayBuffer = 34962;
 constexpr int kElementArrayBuffer = 34963;
-
-std::uint64_t surface_hash(const BodyModel& m) {
-  Hasher h;
-  h.add(std::span<const Vec3>(m.surface.positions));
-  h.add(std::span<const TriIndices>(m.surface.triangles));
-  h.add(std::span<const std::uint8_t>(m.crack_face));
-  return h.digest();
-}
 
 // The binary chunk and the JSON lists that point into it.
 class Builder {
