@@ -17,8 +17,8 @@ echo "== shatter run --out out/vase_drop      (scenes/vase_drop.json: the vase d
 "$shatter" run --out out/vase_drop
 
 echo
-echo "== shatter render --out out/vase_render --fps 15 --size 960x540      (the same drop, drawn without a display)"
-"$shatter" render --out out/vase_render --fps 15 --size 960x540
+echo "== shatter render --out out/vase_render --fps 15 --size 960x540 --camera 35,25,1.4 --target 0,0.3,0      (the same drop, drawn without a display)"
+"$shatter" render --out out/vase_render --fps 15 --size 960x540 --camera 35,25,1.4 --target 0,0.3,0
 
 echo
 echo "== shatter inspect examples/glass_bar/bar.vtk"
