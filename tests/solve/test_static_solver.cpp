@@ -154,7 +154,7 @@ TEST(StaticSolver, LoadIncrementsRescueLargeLoad) {
   StaticSolverOptions options;
   options.max_newton_iterations = 8;
   options.max_load_halvings = 0;
-  options.project_psd = false;  // the exact Hessian: quadratic convergence once close
+  options.tangent = TangentKind::exact;  // the exact Hessian: quadratic convergence once close
   std::vector<Vec3> x = mesh.positions;
   Result<StaticReport> r = solve_static(model, problem, x, options);
   ASSERT_OK(r);
@@ -408,7 +408,7 @@ TEST(StaticSolver, StatusNamesTheOutcome) {
   // Without PSD projection and line search, a hard compression: the full step raises the energy.
   options = defaults;
   options.line_search = false;
-  options.project_psd = false;
+  options.tangent = TangentKind::exact;
   options.max_load_halvings = 0;
   p = bar.problem;
   for (Vec3& f : p.external_forces) f *= -1e4;

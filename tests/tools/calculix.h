@@ -4,6 +4,8 @@
 // Nodes and elements are numbered by index + 1 in the deck.
 #pragma once
 
+#include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -25,6 +27,13 @@ struct Deck {
   std::vector<std::uint8_t> held;             ///< held components per node, bit c = component c (#nodes)
   std::vector<Vec3> prescribed_displacement;  ///< of held components, m (#nodes; empty = zero)
   std::vector<Vec3> forces;                   ///< nodal forces, N (#nodes)
+  /// Geometrically non-linear (NLGEOM): *ELASTIC is then St. Venant-Kirchhoff (the second
+  /// Piola-Kirchhoff stress linear in the Green strain), CLOADs are dead loads.
+  bool nlgeom = false;
+  double initial_increment = 1.0;  ///< NLGEOM: first increment of the unit step period
+  /// NLGEOM: *CONTROLS field tolerances R_n (residual against the average force) and C_n
+  /// (correction against the increment's displacement); 0 = CalculiX's defaults (0.005, 0.01).
+  double residual_control = 0;
 };
 
 /// True when a `ccx` program is on the PATH.
@@ -49,7 +58,19 @@ inline std::string deck_text(const Deck& d) {
   s += "*MATERIAL, NAME=MAT\n*ELASTIC\n";
   std::snprintf(buf, sizeof buf, "%.17g, %.17g\n", d.youngs_modulus, d.poisson_ratio);
   s += buf;
-  s += "*SOLID SECTION, ELSET=EALL, MATERIAL=MAT\n*STEP\n*STATIC\n*BOUNDARY\n";
+  s += "*SOLID SECTION, ELSET=EALL, MATERIAL=MAT\n";
+  if (d.nlgeom) {
+    s += "*STEP, NLGEOM, INC=10000\n";
+    if (d.residual_control > 0) {
+      std::snprintf(buf, sizeof buf, "*CONTROLS, PARAMETERS=FIELD\n%.6g, %.6g\n", d.residual_control,
+                    d.residual_control);
+      s += buf;
+    }
+    std::snprintf(buf, sizeof buf, "*STATIC\n%.6g, 1.0\n*BOUNDARY\n", d.initial_increment);
+    s += buf;
+  } else {
+    s += "*STEP\n*STATIC\n*BOUNDARY\n";
+  }
   for (Index i = 0; i < m.num_nodes(); ++i)
     for (int c = 0; c < 3; ++c)
       if (d.held[i] & (1u << c)) {
@@ -72,7 +93,29 @@ struct Solution {
   std::vector<Vec3> displacement;  ///< m (#nodes)
   std::vector<Mat3> stress;        ///< Pa, at the single integration point of each C3D4 (#tets)
   std::string error;               ///< "" on success
+  int increments = 0;              ///< converged increments (from ccx's log)
+  int iterations = 0;              ///< equilibrium iterations over all attempts (from ccx's log)
+  double seconds = 0;              ///< wall time of the ccx run, s
 };
+
+/// Count "increment N attempt M" (converged increments are the distinct N) and "iteration K"
+/// lines of ccx's standard output.
+inline void count_iterations(const std::string& log, Solution& s) {
+  std::istringstream in(log);
+  int last_increment = 0;
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream ls(line);
+    std::string word;
+    ls >> word;
+    if (word == "increment") {
+      int n = 0;
+      if (ls >> n) last_increment = std::max(last_increment, n);
+    } else if (word == "iteration") {
+      ++s.iterations;
+    }
+  }
+  s.increments = last_increment;
+}
 
 /// Parse the .dat blocks "displacements (vx,vy,vz) ..." and "stresses (elem, integ.pnt.,sxx,syy,szz,
 /// sxy,sxz,syz) ...".
@@ -84,12 +127,15 @@ inline Solution parse_dat(const std::string& text, Index num_nodes, Index num_te
   enum { none, disp, stress } block = none;
   Index nodes_read = 0, tets_read = 0;
   for (std::string line; std::getline(in, line);) {
+    // A non-linear step prints every increment: the last block of each kind is the result.
     if (line.find("displacements (vx,vy,vz)") != std::string::npos) {
       block = disp;
+      nodes_read = 0;
       continue;
     }
     if (line.find("stresses (elem, integ.pnt.") != std::string::npos) {
       block = stress;
+      tets_read = 0;
       continue;
     }
     std::istringstream ls(line);
@@ -132,9 +178,18 @@ inline Solution run(const Deck& d, const std::string& folder) {
   }
   const std::string cmd = "cd '" + folder + "' && OMP_NUM_THREADS=1 ccx -i job > ccx.log 2>&1";
   Solution s;
-  if (std::system(cmd.c_str()) != 0) {
+  const auto start = std::chrono::steady_clock::now();
+  const int status = std::system(cmd.c_str());
+  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (status != 0) {
     s.error = "ccx failed; see " + folder + "/ccx.log";
     return s;
+  }
+  {
+    std::ifstream log(folder + "/ccx.log");
+    std::stringstream text;
+    text << log.rdbuf();
+    count_iterations(text.str(), s);
   }
   std::ifstream in(folder + "/job.dat");
   if (!in) {
@@ -143,7 +198,11 @@ inline Solution run(const Deck& d, const std::string& folder) {
   }
   std::stringstream text;
   text << in.rdbuf();
-  return parse_dat(text.str(), d.mesh->num_nodes(), d.mesh->num_tets());
+  Solution parsed = parse_dat(text.str(), d.mesh->num_nodes(), d.mesh->num_tets());
+  parsed.increments = s.increments;
+  parsed.iterations = s.iterations;
+  parsed.seconds = s.seconds;
+  return parsed;
 }
 
 }  // namespace shatter::calculix

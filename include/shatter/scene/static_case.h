@@ -48,6 +48,7 @@ struct CaseSolverSettings {
   std::optional<std::int64_t> max_iterations;         ///< Newton iterations (per load step)
   std::optional<std::int64_t> load_steps;             ///< load increments
   std::optional<bool> line_search;                    ///< energy line search on / off
+  std::optional<TangentKind> tangent;                 ///< "on-demand" | "projected" | "exact"
 };
 
 /// A parsed load case.

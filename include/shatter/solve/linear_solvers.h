@@ -49,6 +49,10 @@ struct LinearSolveReport {
   double relative_residual = 0;  ///< ||b - A x|| / ||b|| (0 when b = 0)
   double time_ms = 0;            ///< wall time of the whole solve, ms
   bool analyzed = false;         ///< direct: this call redid the symbolic analysis
+  /// The matrix showed it is not positive definite: a diagonal block or a CG curvature p.Ap that
+  /// is not positive, or a pivot of the factorization that is not. The direct solver still returns
+  /// its (exact) solution then; PCG stops where it found out.
+  bool indefinite = false;
   std::string message;           ///< why it did not converge ("" when it did)
 };
 

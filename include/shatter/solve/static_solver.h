@@ -6,6 +6,7 @@
 
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "shatter/core/error.h"
@@ -30,6 +31,29 @@ struct StaticProblem {
   Vec3 gravity_vector = Vec3(0, -9.81, 0);  ///< m/s^2
 };
 
+/// The stiffness matrix K of a Newton step (docs/solver.md).
+enum class TangentKind {
+  /// The exact K first; where the linear solve finds it indefinite (a diagonal block or a CG
+  /// curvature that is not positive, a negative pivot of the factorization) or its step is not a
+  /// descent direction or finds no energy decrease, the step is redone with the projected K
+  /// ("project on demand", Longva et al. 2023, "Pitfalls of Projection").
+  on_demand,
+  /// Every element stiffness projected to positive semi-definite (AssemblyOptions::project_psd):
+  /// always a descent direction, but convergence turns linear where compression is large.
+  projected,
+  /// The exact K only; a failure is the step's failure.
+  exact,
+};
+/// "on-demand", "projected", "exact".
+const char* to_string(TangentKind kind);
+/// The inverse of to_string (an error names the valid values).
+Result<TangentKind> parse_tangent_kind(std::string_view name);
+
+/// Iterations at or under this many make the next load step larger (StaticSolverOptions::load_increments).
+inline constexpr int kEasyLoadStep = 4;
+/// Iterations above this many make the next load step smaller.
+inline constexpr int kHardLoadStep = 10;
+
 /// Settings of the Newton solver.
 struct StaticSolverOptions {
   int max_newton_iterations = 20;  ///< per load step
@@ -38,7 +62,9 @@ struct StaticSolverOptions {
   /// prescribed anchor positions cause). Where round-off keeps the residual above that (stiff
   /// bodies, tight tolerances), a residual within its estimated round-off that a Newton step no
   /// longer reduces counts as converged.
-  double relative_residual_tolerance = 1e-6;
+  /// The default resolves displacements to about 1e-7 of their largest (the CalculiX comparison);
+  /// Newton's quadratic convergence makes it cost about one iteration more than 1e-6.
+  double relative_residual_tolerance = 1e-8;
   /// The largest relative residual the round-off rule above may accept under an external load.
   /// Above it the round-off is itself the error (a mesh far from the origin: at x = 1e7 m a glass bar's displacements are
   /// below the spacing of the doubles, and the residual stalls near 1), and the solve ends
@@ -47,11 +73,24 @@ struct StaticSolverOptions {
   /// Backtracking (Armijo) on the potential energy U(x) - f_ext^T x. Without it a step is only
   /// tried at full length (and still rejected when the energy rises or turns non-finite).
   bool line_search = true;
-  bool project_psd = true;  ///< PSD-project each element stiffness
-  int load_increments = 1;  ///< equal load steps to start with
+  /// Which stiffness Newton solves with (TangentKind). The default, on_demand, keeps quadratic
+  /// convergence wherever the exact stiffness is positive definite and the robustness of the
+  /// projected one elsewhere.
+  TangentKind tangent = TangentKind::on_demand;
+  /// The first load step is 1 / load_increments of the load. Later steps adapt: a step that
+  /// converged in at most kEasyLoadStep Newton iterations lets the next grow by half, one that took
+  /// more than kHardLoadStep shrinks it by a quarter (as CalculiX does), and a failed step is
+  /// retried at half its size.
+  int load_increments = 1;
   /// A load step that fails (energy cannot decrease, non-finite values, no convergence) is
   /// retried at half the size, at most this many times in the whole solve.
-  int max_load_halvings = 6;
+  int max_load_halvings = 8;
+  /// Load steps before the last need only this relative residual: they only give the next step
+  /// its start, and Newton's quadratic convergence at the last step makes up for it in one or two
+  /// iterations. Never tighter than relative_residual_tolerance.
+  double intermediate_tolerance = 1e-3;
+  /// Keep one record per Newton iteration in StaticReport::history.
+  bool record_history = true;
   /// PCG: the first Newton step of a load step starts from the previous first step d, scaled by
   /// (r.d)/(d.K d) (the energy-norm optimal multiple: never a worse start than zero). Repeated
   /// impacts at one place with other magnitudes then need few iterations.
@@ -85,6 +124,15 @@ enum class SolveStatus {
 /// "linear-solve-failed".
 const char* to_string(SolveStatus status);
 
+/// One Newton iteration of a solve (StaticReport::history).
+struct NewtonIteration {
+  double load_fraction = 0;      ///< of the load step it belongs to
+  double relative_residual = 0;  ///< before the step, against the full load's reference
+  double step_length = 0;        ///< the line search's accepted fraction of the Newton step (0: none)
+  bool projected = false;        ///< solved with the projected stiffness
+  int linear_iterations = 0;     ///< PCG iterations (0 for the direct solver), all tries together
+};
+
 /// How a static solve went.
 struct StaticReport {
   bool converged = false;                            ///< status == SolveStatus::converged
@@ -94,6 +142,11 @@ struct StaticReport {
   double load_fraction = 0;                          ///< fraction of the load in equilibrium at the returned x
   int linear_iterations_total = 0;                   ///< PCG iterations over all Newton iterations
   int line_search_cuts = 0;                          ///< step halvings by the line search
+  int projected_iterations = 0;                      ///< Newton iterations that used the projected stiffness
+  int load_step_failures = 0;                        ///< load steps retried at half the size
+  /// Every Newton iteration, then one last entry with the final residual (step_length 0), when
+  /// StaticSolverOptions::record_history.
+  std::vector<NewtonIteration> history;
   double assembly_ms = 0;                            ///< stiffness refills (and the pattern when built), ms
   double linear_solve_ms = 0;                        ///< linear solves (factorizations, PCG), ms
   double force_ms = 0;                               ///< internal forces and energies, ms
@@ -140,10 +193,18 @@ class StaticSolver {
   /// st.r = s f_ext - F(x) on the free components (0 on held ones) at load fraction s, and
   /// st.round_off; returns ||st.r||, N.
   double residual(SolveState& st, double s);
-  /// Newton iterations at load fraction s from the current x: converged, or why not.
-  Outcome newton_load_step(SolveState& st, double s);
-  /// Assembles K at x and solves K dx = r (inexactly with PCG) into st.dx.
-  Outcome newton_direction(SolveState& st, int iteration, double relative_residual);
+  /// Newton iterations at load fraction s from the current x until the relative residual is at
+  /// most `tolerance`: converged, or why not. `iterations` receives the Newton iterations taken.
+  Outcome newton_load_step(SolveState& st, double s, double tolerance, int& iterations);
+  /// One Newton iteration at load fraction s: direction (exact or projected stiffness, by
+  /// options().tangent) and line search.
+  Outcome newton_iteration(SolveState& st, double s, int iteration, double relative_residual);
+  /// Assembles K at x and solves K dx = r (inexactly with PCG) into st.dx; `projected` picks the
+  /// projected stiffness. `indefinite` is set when the solve found K not positive definite.
+  Outcome newton_direction(SolveState& st, int iteration, double relative_residual, bool projected,
+                           bool& indefinite);
+  /// The last history entry: the residual at the returned x.
+  void record_final(SolveState& st) const;
   /// Backtracking on the energy along st.dx; moves x to the accepted point.
   Outcome line_search(SolveState& st, double s);
 

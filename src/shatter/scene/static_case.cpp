@@ -219,6 +219,12 @@ Result<CaseSolverSettings> read_solver(const Json& value, const Where& where) {
     SHATTER_TRY(v, json_input::read_bool(*j, where.key("line_search")));
     s.line_search = *v;
   }
+  if (const Json* j = r.get("tangent")) {
+    SHATTER_TRY(v, json_input::read_string(*j, where.key("tangent")));
+    auto kind = parse_tangent_kind(*v);
+    if (!kind.ok()) return where.key("tangent").error(kind.error().message);
+    s.tangent = *kind;
+  }
   SHATTER_TRY(done, r.finish());
   return s;
 }
@@ -550,6 +556,7 @@ StaticSolverOptions make_solver_options(const CaseSolverSettings& s) {
   if (s.max_iterations) o.max_newton_iterations = static_cast<int>(*s.max_iterations);
   if (s.load_steps) o.load_increments = static_cast<int>(*s.load_steps);
   if (s.line_search) o.line_search = *s.line_search;
+  if (s.tangent) o.tangent = *s.tangent;
   return o;
 }
 

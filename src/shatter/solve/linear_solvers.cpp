@@ -74,6 +74,7 @@ LinearSolveReport LinearSolver::solve_direct(const BlockSparseMatrix& a, const E
     report.message = "sparse LDL^T factorization failed (singular matrix: is the body anchored?)";
     return report;
   }
+  report.indefinite = !(ldlt_.vectorD().minCoeff() > 0.0);
   x = ldlt_.solve(b);
   if (!all_finite(x)) {
     x.setZero(a.size());
@@ -151,6 +152,7 @@ LinearSolveReport LinearSolver::solve_pcg(const BlockSparseMatrix& a, const Eige
   LinearSolveReport report;
   if (!invert_diagonal_blocks(a, report.message)) {
     x.setZero(a.size());
+    report.indefinite = true;
     return report;
   }
   const double b_norm = b.norm();
@@ -173,6 +175,7 @@ LinearSolveReport LinearSolver::solve_pcg(const BlockSparseMatrix& a, const Eige
     const double pq = p_.dot(q_);
     if (!(pq > 0.0) || !(rz > 0.0)) {
       report.message = "matrix or preconditioner is not positive definite (CG breakdown)";
+      report.indefinite = !(pq > 0.0);
       break;
     }
     const double alpha = rz / pq;

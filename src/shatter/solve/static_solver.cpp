@@ -178,8 +178,24 @@ struct StaticSolver::SolveState {
   double round_off = 0;             ///< estimated round-off in ||r|| at the last residual evaluation, N
   double energy = std::numeric_limits<double>::quiet_NaN();  ///< U(x) of the active tets, J (NaN: not yet known)
   std::vector<Vec3> x_trial;                                 ///< line-search trial positions, m (#nodes)
+  double step_length = 0;  ///< the last line search's accepted fraction of the step (0: none)
   StaticReport report;
 };
+
+const char* to_string(TangentKind kind) {
+  switch (kind) {
+    case TangentKind::on_demand: return "on-demand";
+    case TangentKind::projected: return "projected";
+    case TangentKind::exact: return "exact";
+  }
+  return "?";
+}
+
+Result<TangentKind> parse_tangent_kind(std::string_view name) {
+  for (TangentKind k : {TangentKind::on_demand, TangentKind::projected, TangentKind::exact})
+    if (name == to_string(k)) return k;
+  return field_error("tangent", "unknown tangent '" + std::string(name) + "'; expected on-demand, projected or exact");
+}
 
 const char* to_string(SolveStatus status) {
   switch (status) {
@@ -201,22 +217,28 @@ Result<StaticReport> StaticSolver::solve(const FemModel& model, const StaticProb
   if (Outcome input = check_inputs(st); !input.ok()) return st.finish(std::move(input));
   if (std::optional<Outcome> early = prepare(st)) return st.finish(std::move(*early));
 
-  // Load stepping: a failed step restarts from the last equilibrium at half the step size.
+  // Load stepping (automatic increments, as CalculiX's): easy steps let the next one grow, hard
+  // ones make it shrink, and a failed step restarts from the last equilibrium at half the size.
   double done = 0;
   const int increments = std::max(1, options_.load_increments);
   double step = 1.0 / increments;
   int halvings = 0;
   std::vector<Vec3> x_good = x;
   Outcome failure;
+  const double final_tolerance = options_.relative_residual_tolerance;
+  const double intermediate_tolerance = std::max(options_.intermediate_tolerance, final_tolerance);
   while (done < 1.0) {
     const double target = std::min(1.0, done + step);
     // Snap to the full load when the summed steps fall short of it only by round-off.
     const double s = target >= 1.0 - 1e-12 ? 1.0 : target;
-    Outcome why = newton_load_step(st, s);
+    int iterations = 0;
+    Outcome why = newton_load_step(st, s, s == 1.0 ? final_tolerance : intermediate_tolerance, iterations);
     if (why.ok()) {
       done = s;
       ++st.report.load_steps;
       x_good = x;
+      if (iterations <= kEasyLoadStep) step *= 1.5;
+      if (iterations > kHardLoadStep) step *= 0.75;
       continue;
     }
     x = x_good;
@@ -225,13 +247,18 @@ Result<StaticReport> StaticSolver::solve(const FemModel& model, const StaticProb
       break;
     }
     ++halvings;
-    step *= 0.5;
+    ++st.report.load_step_failures;
+    step = 0.5 * (s - done);
   }
   st.report.load_fraction = done;
-  if (failure.ok()) return st.finish({});
+  if (failure.ok()) {
+    record_final(st);
+    return st.finish({});
+  }
   // Residual at the returned x against the full load.
   st.report.relative_residual = residual(st, 1.0) / st.reference;
-  return st.finish({failure.status, "load step failed at load fraction " + std::to_string(done) + " after " +
+  record_final(st);
+  return st.finish({failure.status, "load step failed at load fraction " + format_number(done) + " after " +
                                         std::to_string(halvings) + " halvings: " + failure.message});
 }
 
@@ -326,15 +353,16 @@ double StaticSolver::residual(SolveState& st, double s) {
   return st.r.norm();
 }
 
-StaticSolver::Outcome StaticSolver::newton_load_step(SolveState& st, double s) {
+StaticSolver::Outcome StaticSolver::newton_load_step(SolveState& st, double s, double tolerance, int& iterations) {
   st.set_anchors(s);
   st.energy = std::numeric_limits<double>::quiet_NaN();
   double previous_rel = std::numeric_limits<double>::infinity();
   for (int it = 0;; ++it) {
+    iterations = it;
     const double rel = residual(st, s) / st.reference;
     st.report.relative_residual = rel;
     if (!std::isfinite(rel)) return {SolveStatus::not_finite, "internal forces are not finite"};
-    if (rel <= options_.relative_residual_tolerance) return {};
+    if (rel <= tolerance) return {};
     // Round-off level: the residual is within the bound on its own evaluation error and the last
     // Newton step no longer reduced it. No further step can do better in double precision (the
     // positions carry small displacements of stiff bodies only to ~eps |x|).
@@ -352,15 +380,54 @@ StaticSolver::Outcome StaticSolver::newton_load_step(SolveState& st, double s) {
       return {SolveStatus::no_convergence, "no convergence in " + std::to_string(it) +
                                                " Newton iterations (relative residual " + format_number(rel) + ")"};
     previous_rel = rel;
-    if (Outcome direction = newton_direction(st, it, rel); !direction.ok()) return direction;
-    if (Outcome step = line_search(st, s); !step.ok()) return step;
+    if (Outcome step = newton_iteration(st, s, it, rel); !step.ok()) return step;
   }
 }
 
-StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iteration, double relative_residual) {
+StaticSolver::Outcome StaticSolver::newton_iteration(SolveState& st, double s, int iteration,
+                                                     double relative_residual) {
+  NewtonIteration record{.load_fraction = s, .relative_residual = relative_residual};
+  const int linear_before = st.report.linear_iterations_total;
+  const auto finish = [&](Outcome outcome) {
+    record.linear_iterations = st.report.linear_iterations_total - linear_before;
+    if (options_.record_history) st.report.history.push_back(record);
+    ++st.report.newton_iterations;
+    if (record.projected) ++st.report.projected_iterations;
+    return outcome;
+  };
+  // Project on demand: the exact stiffness first (quadratic convergence where it is positive
+  // definite), the projected one where the exact one fails to give an energy decrease.
+  const bool on_demand = options_.tangent == TangentKind::on_demand;
+  if (options_.tangent != TangentKind::projected) {
+    bool indefinite = false;
+    Outcome direction = newton_direction(st, iteration, relative_residual, false, indefinite);
+    if (!on_demand && !direction.ok()) return finish(std::move(direction));
+    if (direction.ok() && !(on_demand && indefinite)) {
+      Outcome step = line_search(st, s);
+      record.step_length = st.step_length;
+      if (step.ok() || !on_demand) return finish(std::move(step));
+    }
+  }
+  record.projected = true;
+  bool indefinite = false;
+  if (Outcome direction = newton_direction(st, iteration, relative_residual, true, indefinite); !direction.ok())
+    return finish(std::move(direction));
+  Outcome step = line_search(st, s);
+  record.step_length = st.step_length;
+  return finish(std::move(step));
+}
+
+void StaticSolver::record_final(SolveState& st) const {
+  if (options_.record_history)
+    st.report.history.push_back(
+        NewtonIteration{.load_fraction = st.report.load_fraction, .relative_residual = st.report.relative_residual});
+}
+
+StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iteration, double relative_residual,
+                                                     bool projected, bool& indefinite) {
   {
     const auto t = Clock::now();
-    assemble_stiffness(st.model, st.x, AssemblyOptions{.project_psd = options_.project_psd}, matrix_);
+    assemble_stiffness(st.model, st.x, AssemblyOptions{.project_psd = projected}, matrix_);
     st.report.assembly_ms += ms_since(t);
   }
   // Inexact Newton: the linear residual need only be a tenth of what the Newton tolerance
@@ -381,10 +448,10 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
   }
   linear_.set_options(linear);
   const LinearSolveReport lin = linear_.solve(matrix_, st.r, st.dx);
-  if (iteration == 0 && st.dx.allFinite()) first_step_ = st.dx;
+  indefinite = lin.indefinite;
   st.report.linear_solve_ms += lin.time_ms;
   st.report.linear_iterations_total += lin.iterations;
-  ++st.report.newton_iterations;
+  if (iteration == 0 && st.dx.allFinite() && !lin.indefinite) first_step_ = st.dx;
   // An unconverged PCG still gives a usable (inexact Newton) direction; a failed one does not.
   if (!lin.converged && options_.linear.kind == LinearSolverKind::direct_ldlt)
     return {SolveStatus::linear_solve_failed, "linear solve failed: " + lin.message};
@@ -408,6 +475,7 @@ StaticSolver::Outcome StaticSolver::line_search(SolveState& st, double s) {
   for (Index a = 0; a < na; ++a)
     for (int c = 0; c < 3; ++c) work += s * st.load[node_of_active[a]][c] * st.dx[3 * a + c];
   double alpha = 1.0;
+  st.step_length = 0;
   for (int cut = 0; cut < 30; ++cut) {
     st.x_trial = st.x;
     for (Index a = 0; a < na; ++a) {
@@ -424,6 +492,7 @@ StaticSolver::Outcome StaticSolver::line_search(SolveState& st, double s) {
     if (std::isfinite(change) && change <= -kArmijo * alpha * slope + slack) {
       st.x.swap(st.x_trial);
       st.energy = trial_energy;
+      st.step_length = alpha;
       return {};
     }
     if (!options_.line_search) break;
