@@ -35,7 +35,7 @@ struct LinearSolverOptions {
   LinearSolverKind kind = LinearSolverKind::pcg_block_gauss_seidel;
   /// PCG stops when ||b - A x|| <= tol ||b||. The static solver loosens it per Newton iteration
   /// to what its own tolerance needs (inexact Newton), never below this value.
-  double relative_tolerance = 1e-8;
+  double relative_tolerance = 1e-10;
   int max_iterations = 2000;  ///< PCG iteration limit
   /// PCG starts from the x passed in (the previous solution, when the caller keeps it) instead of
   /// from zero. The direct solver ignores it.

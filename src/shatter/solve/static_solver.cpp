@@ -357,6 +357,7 @@ StaticSolver::Outcome StaticSolver::newton_load_step(SolveState& st, double s, d
   st.set_anchors(s);
   st.energy = std::numeric_limits<double>::quiet_NaN();
   double previous_rel = std::numeric_limits<double>::infinity();
+  const bool linear_model = st.model.model == ModelKind::linear;
   for (int it = 0;; ++it) {
     iterations = it;
     const double rel = residual(st, s) / st.reference;
@@ -366,7 +367,9 @@ StaticSolver::Outcome StaticSolver::newton_load_step(SolveState& st, double s, d
     // Round-off level: the residual is within the bound on its own evaluation error and the last
     // Newton step no longer reduced it. No further step can do better in double precision (the
     // positions carry small displacements of stiff bodies only to ~eps |x|).
-    if (rel <= st.round_off / st.reference && rel > 0.5 * previous_rel) {
+    // The linear model's residual is linear in x: after one step it is what the linear solve left
+    // plus round-off, and no further step can lower it, so it need not be seen to stall.
+    if (rel <= st.round_off / st.reference && (rel > 0.5 * previous_rel || linear_model)) {
       // Only a load can be missed: with none, the reference is itself an imbalance of round-off
       // size (a body at rest) and a relative residual near 1 is the right answer.
       if (rel <= options_.max_round_off_residual || !st.load_reference) return {};
