@@ -105,7 +105,19 @@ int run_static(const StaticArgs& args) {
                    {"load_steps", report.load_steps},
                    {"relative_residual", report.relative_residual},
                    {"linear_solver", to_string(options.linear.kind)},
-                   {"linear_iterations", report.linear_iterations_total}};
+                   {"linear_iterations", report.linear_iterations_total},
+                   {"tangent", to_string(options.tangent)},
+                   {"projected_iterations", report.projected_iterations}};
+    // One entry per Newton iteration (then the final residual): load fraction, relative residual
+    // before the step, accepted step length, projected stiffness, PCG iterations.
+    nlohmann::ordered_json history = nlohmann::ordered_json::array();
+    for (const NewtonIteration& it : report.history)
+      history.push_back({{"load_fraction", it.load_fraction},
+                         {"relative_residual", it.relative_residual},
+                         {"step_length", it.step_length},
+                         {"projected", it.projected},
+                         {"linear_iterations", it.linear_iterations}});
+    j["solver"]["history"] = std::move(history);
     const Vec3& u = results.displacement[maxu];
     j["max_displacement"] = {
         {"value", results.max_displacement}, {"node_id", mesh.node_id(maxu)}, {"vector", {u.x(), u.y(), u.z()}}};

@@ -39,7 +39,8 @@ const char* kGoodCase = R"({
   ],
   "gravity": true,
   "solver": {"linear_solver": "pcg-jacobi", "tolerance": 1e-9, "max_iterations": 7, "load_steps": 2,
-             "line_search": false, "linear_tolerance": 1e-11, "linear_max_iterations": 500}
+             "line_search": false, "linear_tolerance": 1e-11, "linear_max_iterations": 500,
+             "tangent": "exact"}
 })";
 
 TEST(StaticCase, ParsesEveryField) {
@@ -69,6 +70,13 @@ TEST(StaticCase, ParsesEveryField) {
   EXPECT_FALSE(o.line_search);
   EXPECT_EQ(o.linear.relative_tolerance, 1e-11);
   EXPECT_EQ(o.linear.max_iterations, 500);
+  EXPECT_EQ(o.tangent, TangentKind::exact);
+  const auto bad = parse_static_case(R"({"material": "glass", "anchors": [{"nodes": [1]}],
+                                          "solver": {"tangent": "clamped"}})",
+                                     "t.json");
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().field, "solver.tangent") << bad.error().to_string();
+  EXPECT_NE(bad.error().message.find("on-demand"), std::string::npos) << bad.error().message;
 }
 
 TEST(StaticCase, DefaultsAndShortForms) {

@@ -53,7 +53,7 @@ struct LinearSolveReport {
   /// is not positive, or a pivot of the factorization that is not. The direct solver still returns
   /// its (exact) solution then; PCG stops where it found out.
   bool indefinite = false;
-  std::string message;           ///< why it did not converge ("" when it did)
+  std::string message;  ///< why it did not converge ("" when it did)
 };
 
 /// A reusable solver: keeps the symbolic factorization (per pattern_id) and the work vectors.

@@ -135,15 +135,15 @@ struct NewtonIteration {
 
 /// How a static solve went.
 struct StaticReport {
-  bool converged = false;                            ///< status == SolveStatus::converged
-  int newton_iterations = 0;                         ///< Newton iterations over all load steps
-  double relative_residual = 0;                      ///< at the returned x, as in the tolerance
-  int load_steps = 0;                                ///< load steps completed
-  double load_fraction = 0;                          ///< fraction of the load in equilibrium at the returned x
-  int linear_iterations_total = 0;                   ///< PCG iterations over all Newton iterations
-  int line_search_cuts = 0;                          ///< step halvings by the line search
-  int projected_iterations = 0;                      ///< Newton iterations that used the projected stiffness
-  int load_step_failures = 0;                        ///< load steps retried at half the size
+  bool converged = false;           ///< status == SolveStatus::converged
+  int newton_iterations = 0;        ///< Newton iterations over all load steps
+  double relative_residual = 0;     ///< at the returned x, as in the tolerance
+  int load_steps = 0;               ///< load steps completed
+  double load_fraction = 0;         ///< fraction of the load in equilibrium at the returned x
+  int linear_iterations_total = 0;  ///< PCG iterations over all Newton iterations
+  int line_search_cuts = 0;         ///< step halvings by the line search
+  int projected_iterations = 0;     ///< Newton iterations that used the projected stiffness
+  int load_step_failures = 0;       ///< load steps retried at half the size
   /// Every Newton iteration, then one last entry with the final residual (step_length 0), when
   /// StaticSolverOptions::record_history.
   std::vector<NewtonIteration> history;
@@ -201,8 +201,7 @@ class StaticSolver {
   Outcome newton_iteration(SolveState& st, double s, int iteration, double relative_residual);
   /// Assembles K at x and solves K dx = r (inexactly with PCG) into st.dx; `projected` picks the
   /// projected stiffness. `indefinite` is set when the solve found K not positive definite.
-  Outcome newton_direction(SolveState& st, int iteration, double relative_residual, bool projected,
-                           bool& indefinite);
+  Outcome newton_direction(SolveState& st, int iteration, double relative_residual, bool projected, bool& indefinite);
   /// The last history entry: the residual at the returned x.
   void record_final(SolveState& st) const;
   /// Backtracking on the energy along st.dx; moves x to the accepted point.
