@@ -325,6 +325,30 @@ TEST(StaticFractureCli, FarFromTheOriginSolvesAsAtTheOrigin) {
   EXPECT_NEAR(result->mesh.positions[0].x(), 1e7, 1.0);
 }
 
+// The glass bar scaled by 1e60 (its positions by 1e60, 1 N at the end): the displacements, about
+// 1e-128 of the coordinates, cannot be held by a double, and the rest state's round-off forces
+// (F = I to 1e-16, over areas of 1e118 m^2) dwarf the load. It used to "converge" to |u| = 6e42 m;
+// it must end not converged, exit 1 and write nothing.
+TEST(StaticFractureCli, HugeScaleIsNotAFalseSuccess) {
+  test::TempDir dir;
+  auto bar = read_mesh(kExamples + "glass_bar/bar.vtk");
+  ASSERT_OK(bar);
+  TetMesh huge = bar->mesh;
+  for (Vec3& v : huge.positions) v *= 1e60;
+  ASSERT_OK(write_mesh(dir.file("huge.vtu"), huge));
+  const std::string c = R"({"material": "glass", "model": "linear", "anchors": [
+      {"plane": {"point": [0, 0, 0], "normal": [1, 0, 0]}, "components": "x"},
+      {"plane": {"point": [0, 0, 0], "normal": [0, 1, 0]}, "components": "y"},
+      {"plane": {"point": [0, 0, 0], "normal": [0, 0, 1]}, "components": "z"}],
+      "loads": [{"plane": {"point": [2e59, 0, 0], "normal": [1, 0, 0]}, "total_force": [1, 0, 0]}]})";
+  auto r = run_static(dir.file("huge.vtu"), write_case(dir, "huge.json", c), dir.file("out"), "", true);
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("did not converge"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("double precision"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("nan"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(fs::path(dir.file("out")) / "displacements.csv"));
+}
+
 // A mesh of two separate pieces that nothing breaks: the summary says so with the fragment count
 // it then lists (it used to say "1 fragment" and list 2).
 TEST(StaticFractureCli, SeparatePiecesAreCountedNotCracked) {

@@ -376,8 +376,9 @@ StaticSolver::Outcome StaticSolver::newton_load_step(SolveState& st, double s, d
       return {SolveStatus::no_convergence,
               "the residual stalls at its round-off level, relative residual " + format_number(rel) + " (above " +
                   format_number(options_.max_round_off_residual) +
-                  "): double precision cannot resolve the displacements at these coordinates (move the mesh "
-                  "near the origin)"};
+                  "): the displacements are below what double precision resolves at this mesh's coordinates "
+                  "and size (check the units; a mesh far from the origin is solved about its centre by "
+                  "shatter static)"};
     }
     if (it == options_.max_newton_iterations)
       return {SolveStatus::no_convergence, "no convergence in " + std::to_string(it) +
