@@ -2,8 +2,8 @@
 find_package(Eigen3 3.4 REQUIRED NO_MODULE)
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(XXHASH REQUIRED IMPORTED_TARGET libxxhash)
-if(SHATTER_USE_OPENMP)
-  find_package(OpenMP REQUIRED COMPONENTS CXX)
+if(SHATTER_THREADS)
+  find_package(Threads REQUIRED)  # the worker pool of core/parallel.h
 endif()
 find_package(nlohmann_json 3.10 REQUIRED)  # shape, case and scene files
 find_package(ZLIB REQUIRED)  # compressed VTU arrays (zlib1g-dev)

@@ -3,8 +3,8 @@
 # only what is missing and says what it installs. Needs root or sudo.
 #   scripts/setup.sh          build + test dependencies
 #   scripts/setup.sh --fuzz   also clang-19 and its libFuzzer runtime
-#   scripts/setup.sh --tsan   also clang-19, its TSan runtime, LLVM's OpenMP runtime with the Archer
-#                             tool (libomp-19-dev) and llvm-symbolizer (llvm-19), for the tsan preset
+#   scripts/setup.sh --tsan   also clang-19, its TSan runtime and llvm-symbolizer (llvm-19), for the
+#                             tsan preset
 #   scripts/setup.sh --test   also the test tools from the npm registry: the Khronos glTF validator
 #                             (tests/tools/gltf; Node.js and npm from Debian when npm is missing)
 # The flags combine (scripts/test.sh passes all three).
@@ -33,7 +33,7 @@ test_tools=0
 for arg in "$@"; do
   case "$arg" in
     --fuzz) packages+=(clang-19 libclang-rt-19-dev) ;;
-    --tsan) packages+=(clang-19 libclang-rt-19-dev libomp-19-dev llvm-19) ;;
+    --tsan) packages+=(clang-19 libclang-rt-19-dev llvm-19) ;;
     --test)
       test_tools=1
       command -v npm >/dev/null || packages+=(nodejs npm)

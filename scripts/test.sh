@@ -5,8 +5,8 @@
 #   1. release build, all tests (unit, property, cross-checks against meshio and CalculiX);
 #   2. the same tests under AddressSanitizer + UBSan;
 #   3. the tests of the threaded code (labels core, fem, solve, fracture, meshing) under
-#      ThreadSanitizer, no suppressions: clang-19 with LLVM's libomp, whose Archer tool shows
-#      OpenMP's own synchronisation to TSan (GCC's libgomp is not instrumented: false races).
+#      ThreadSanitizer (clang-19), no suppressions; shatter's worker pool synchronises through
+#      the standard library's mutexes and atomics, which TSan sees.
 #      Left out there: CmdMesh.* (needs the CLI, not built for this stage);
 #   4. every libFuzzer target for a short time (SHATTER_FUZZ_SECONDS, default 20) from its corpus;
 #   5. find_package(shatter) from a separate project against an installed copy.

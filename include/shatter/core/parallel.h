@@ -1,43 +1,65 @@
 // Threading. Results never depend on the thread count: parallel loops write only to their own
 // indices, and reductions go through fixed-size chunks summed in chunk order.
+//
+// The loops run on shatter's own pool of worker threads (docs/architecture.md, "Threads"). The
+// calling thread always takes part and claims chunks of the range one at a time, as do the
+// workers that are awake; it waits only for chunks a worker has already claimed, never for a
+// worker to arrive. When other programs hold the cores, a descheduled worker therefore costs at
+// most the chunk it is in, and a worker that never wakes costs nothing: the caller does its share.
 #pragma once
 
 #include <algorithm>
 #include <cstdint>
 #include <vector>
 
-#ifdef SHATTER_HAS_OPENMP
-#include <omp.h>
-#endif
-
 namespace shatter {
 
-/// Most threads set_num_threads accepts: the OpenMP runtime sizes per-thread state for the count it
-/// is given (2^31 threads asked 481 GB of it), so larger counts are clamped here and refused by the CLI.
+/// Most threads set_num_threads accepts (larger counts are clamped here and refused by the CLI).
 inline constexpr int kMaxThreads = 1024;
-/// Threads used by shatter's parallel loops (default: hardware threads). 1 = serial; n < 1 counts
-/// as 1, n > kMaxThreads as kMaxThreads.
+/// Threads used by shatter's parallel loops, the calling thread included. Default: the
+/// environment's SHATTER_NUM_THREADS, else OMP_NUM_THREADS, else the hardware threads. 1 = serial;
+/// n < 1 counts as 1, n > kMaxThreads as kMaxThreads.
 void set_num_threads(int n);
-/// Threads the parallel loops use now (always 1 in a build without OpenMP).
+/// Threads the parallel loops use now (always 1 in a build with SHATTER_THREADS off).
 int num_threads();
 
+namespace detail {
+/// Runs call(context, c) for every chunk c in [0, chunks) on up to `threads` threads (the caller
+/// and pool workers), each chunk exactly once; returns when all have run. Serial when threads < 2
+/// or when called from inside a parallel loop.
+void run_chunks(std::int64_t chunks, void (*call)(void*, std::int64_t), void* context, int threads);
+/// True on a pool worker, and on any thread while it runs the chunks of a parallel loop.
+bool in_parallel_region();
+}  // namespace detail
+
 /// for i in [begin, end): body(i). Iterations must be independent. Runs in parallel only when
-/// end - begin >= min_parallel: a parallel region costs microseconds on idle cores but up to a
-/// scheduler time slice when the cores are oversubscribed (every barrier waits for the slowest,
-/// possibly descheduled, thread), so only loops with a few hundred microseconds of work should
-/// choose a threshold that lets them go parallel.
+/// end - begin >= min_parallel: waking workers and handing out chunks costs a few microseconds, so
+/// only loops with a few hundred microseconds of work should choose a threshold that lets them go
+/// parallel.
 template <class Body>
 void parallel_for(std::int64_t begin, std::int64_t end, Body&& body, std::int64_t min_parallel = 2048) {
-#ifdef SHATTER_HAS_OPENMP
+  const std::int64_t n = end - begin;
+  if (n <= 0) return;
   const int threads = num_threads();
-  if (threads > 1 && end - begin >= min_parallel) {
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (std::int64_t i = begin; i < end; ++i) body(i);
+  if (threads > 1 && n >= min_parallel && !detail::in_parallel_region()) {
+    // About 8 chunks per thread: small enough that the caller can take over a late worker's
+    // share, large enough that claiming them costs nothing measurable.
+    const std::int64_t chunks = std::min<std::int64_t>(n, 8 * static_cast<std::int64_t>(threads));
+    struct Context {
+      Body* body;
+      std::int64_t begin, n, chunks;
+    } context{&body, begin, n, chunks};
+    detail::run_chunks(
+        chunks,
+        [](void* p, std::int64_t c) {
+          const Context& ctx = *static_cast<const Context*>(p);
+          const std::int64_t lo = ctx.begin + c * ctx.n / ctx.chunks;
+          const std::int64_t hi = ctx.begin + (c + 1) * ctx.n / ctx.chunks;
+          for (std::int64_t i = lo; i < hi; ++i) (*ctx.body)(i);
+        },
+        &context, threads);
     return;
   }
-#else
-  (void)min_parallel;
-#endif
   for (std::int64_t i = begin; i < end; ++i) body(i);
 }
 

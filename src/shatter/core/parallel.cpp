@@ -1,22 +1,156 @@
+// The worker pool behind parallel_for (core/parallel.h).
 #include "shatter/core/parallel.h"
 
 #include <algorithm>
+#include <atomic>
+#include <condition_variable>
+#include <cstdlib>
+#include <memory>
+#include <mutex>
+#include <string>
 #include <thread>
 
 namespace shatter {
 namespace {
-int g_threads = 0;  // 0 = not set: hardware concurrency
+
+std::atomic<int> g_threads{0};  // 0 = not set: from the environment or the hardware
+
+int threads_from_environment() {
+  for (const char* name : {"SHATTER_NUM_THREADS", "OMP_NUM_THREADS"}) {
+    const char* v = std::getenv(name);
+    if (v == nullptr || *v == '\0') continue;
+    char* end = nullptr;
+    const long n = std::strtol(v, &end, 10);
+    if (*end == '\0' && n >= 1) return static_cast<int>(std::min<long>(n, kMaxThreads));
+  }
+  return std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, kMaxThreads);
 }
 
-void set_num_threads(int n) { g_threads = std::clamp(n, 1, kMaxThreads); }
+thread_local bool t_in_parallel = false;
+
+#ifdef SHATTER_HAS_THREADS
+// One parallel loop: its chunks are claimed through `next`; `done` counts the finished ones. Held
+// by shared_ptr, so a worker that wakes after the loop has returned still reads valid counters (and
+// finds nothing left to claim); `call` and `context` are only used for a claimed chunk, which the
+// caller always waits for.
+struct Job {
+  std::int64_t chunks = 0;
+  void (*call)(void*, std::int64_t) = nullptr;
+  void* context = nullptr;
+  int helpers_wanted = 0;           // workers that may join (threads - 1)
+  std::atomic<int> helpers{0};      // workers that joined
+  std::atomic<std::int64_t> next{0};
+  std::atomic<int> done{0};         // finished chunks (chunks <= 8 kMaxThreads fits an int)
+
+  void work() {
+    for (;;) {
+      const std::int64_t c = next.fetch_add(1, std::memory_order_relaxed);
+      if (c >= chunks) return;
+      call(context, c);
+      if (done.fetch_add(1, std::memory_order_acq_rel) + 1 == chunks) done.notify_all();
+    }
+  }
+};
+
+class Pool {
+ public:
+  // Never destroyed (see pool()): the workers sleep until the process ends.
+  void run(std::int64_t chunks, void (*call)(void*, std::int64_t), void* context, int threads) {
+    auto job = std::make_shared<Job>();
+    job->chunks = chunks;
+    job->call = call;
+    job->context = context;
+    job->helpers_wanted = threads - 1;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      grow(threads - 1);
+      current_ = job;
+      ++generation_;
+    }
+    wake_.notify_all();
+    t_in_parallel = true;
+    job->work();
+    t_in_parallel = false;
+    // Wait for the chunks that workers claimed (spin briefly: they are usually nearly done).
+    for (int spin = 0; spin < 256; ++spin)
+      if (job->done.load(std::memory_order_acquire) == chunks) break;
+    for (int d = job->done.load(std::memory_order_acquire); d != chunks; d = job->done.load(std::memory_order_acquire))
+      job->done.wait(d, std::memory_order_acquire);
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (current_ == job) current_.reset();
+  }
+
+ private:
+  // Start workers up to `count` (called with mutex_ held).
+  void grow(int count) {
+    while (static_cast<int>(workers_.size()) < count) {
+      workers_.emplace_back([this] { worker(); });
+      workers_.back().detach();
+    }
+  }
+
+  void worker() {
+    t_in_parallel = true;
+    std::uint64_t seen = 0;
+    for (;;) {
+      std::shared_ptr<Job> job;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        wake_.wait(lock, [&] { return generation_ != seen; });
+        seen = generation_;
+        job = current_;
+      }
+      if (job && job->helpers.fetch_add(1, std::memory_order_relaxed) < job->helpers_wanted) job->work();
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::vector<std::thread> workers_;
+  std::shared_ptr<Job> current_;
+  std::uint64_t generation_ = 0;
+};
+
+Pool& pool() {
+  static Pool* p = new Pool;  // intentionally never deleted: workers may still wait on it at exit
+  return *p;
+}
+#endif
+
+}  // namespace
+
+void set_num_threads(int n) { g_threads.store(std::clamp(n, 1, kMaxThreads), std::memory_order_relaxed); }
 
 int num_threads() {
-  if (g_threads > 0) return g_threads;
-#ifdef SHATTER_HAS_OPENMP
-  return std::max(1, omp_get_max_threads());
+#ifdef SHATTER_HAS_THREADS
+  int n = g_threads.load(std::memory_order_relaxed);
+  if (n > 0) return n;
+  static const int from_environment = threads_from_environment();
+  return from_environment;
 #else
+  (void)threads_from_environment;
   return 1;
 #endif
 }
 
+namespace detail {
+
+bool in_parallel_region() { return t_in_parallel; }
+
+void run_chunks(std::int64_t chunks, void (*call)(void*, std::int64_t), void* context, int threads) {
+#ifdef SHATTER_HAS_THREADS
+  if (threads > 1 && chunks > 1 && !t_in_parallel) {
+    pool().run(chunks, call, context, std::min(threads, kMaxThreads));
+    return;
+  }
+#else
+  (void)threads;
+#endif
+  const bool outer = t_in_parallel;
+  t_in_parallel = true;
+  for (std::int64_t c = 0; c < chunks; ++c) call(context, c);
+  t_in_parallel = outer;
+}
+
+}  // namespace detail
 }  // namespace shatter
