@@ -1,7 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <numeric>
+#include <thread>
 #include <vector>
 
 #include "shatter/core/error.h"
@@ -67,6 +70,55 @@ TEST(Parallel, SumIndependentOfThreadCount) {
   const double s5 = parallel_sum(0, 100000, 0.0, f);
   EXPECT_EQ(s1, s2);
   EXPECT_EQ(s1, s5);
+}
+
+TEST(Parallel, EveryIndexExactlyOnceOnAnyThreadCount) {
+  const int saved = num_threads();
+  for (int threads : {1, 2, 3, 8, 33}) {
+    set_num_threads(threads);
+    for (std::int64_t n : {1, 2, 7, 100, 263, 10007}) {
+      std::vector<int> hits(static_cast<std::size_t>(n), 0);
+      parallel_for(0, n, [&](std::int64_t i) { ++hits[static_cast<std::size_t>(i)]; }, 1);
+      EXPECT_EQ(std::count(hits.begin(), hits.end(), 1), n) << threads << " threads, " << n;
+    }
+    // An offset range, and an empty one.
+    std::vector<int> hits(50, 0);
+    parallel_for(10, 40, [&](std::int64_t i) { ++hits[static_cast<std::size_t>(i)]; }, 1);
+    EXPECT_EQ(std::count(hits.begin(), hits.end(), 1), 30);
+    parallel_for(5, 5, [&](std::int64_t) { ADD_FAILURE(); }, 1);
+  }
+  set_num_threads(saved);
+}
+
+TEST(Parallel, NestedLoopsAndConcurrentCallersFinish) {
+  // A loop inside a loop runs serially on its thread; two threads of the program may start loops
+  // at the same time. Both must cover every index once and return.
+  const int saved = num_threads();
+  set_num_threads(4);
+  std::vector<std::int64_t> sums(64, 0);
+  parallel_for(
+      0, 64,
+      [&](std::int64_t i) {
+        EXPECT_TRUE(detail::in_parallel_region());
+        std::vector<std::int64_t> inner(100, 0);
+        parallel_for(0, 100, [&](std::int64_t j) { inner[static_cast<std::size_t>(j)] = j; }, 1);
+        sums[static_cast<std::size_t>(i)] = std::accumulate(inner.begin(), inner.end(), std::int64_t{0});
+      },
+      1);
+  for (std::int64_t s : sums) EXPECT_EQ(s, 4950);
+  EXPECT_FALSE(detail::in_parallel_region());
+  std::vector<double> a(20000, 0.0), b(20000, 0.0);
+  auto fill = [](std::vector<double>& v, double k) {
+    for (int round = 0; round < 50; ++round)
+      parallel_for(
+          0, static_cast<std::int64_t>(v.size()), [&](std::int64_t i) { v[static_cast<std::size_t>(i)] += k; }, 1);
+  };
+  std::thread other([&] { fill(b, 2.0); });
+  fill(a, 1.0);
+  other.join();
+  EXPECT_EQ(std::count(a.begin(), a.end(), 50.0), 20000);
+  EXPECT_EQ(std::count(b.begin(), b.end(), 100.0), 20000);
+  set_num_threads(saved);
 }
 
 TEST(FileIo, AtomicWriteLeavesOldFileOnFailure) {

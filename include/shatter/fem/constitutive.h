@@ -35,9 +35,10 @@ struct Polar {
   Mat3 S;  ///< symmetric stretch
 };
 /// Polar decomposition F = R S with R a rotation (det +1) and S symmetric. For det F < 0 (an
-/// inverted element) S has one negative eigenvalue (the one of smallest magnitude). Computed from
-/// Eigen's JacobiSVD (MPL2), which is deterministic and smooth for non-degenerate F, including F near
-/// a rotation (equal singular values do not make U V^T ill defined).
+/// inverted element) S has one negative eigenvalue (the one of smallest magnitude). For det F > 0
+/// by Higham's scaled Newton iteration on R (a few 3x3 cofactor inverses; smooth, deterministic,
+/// and well defined at equal singular values, F near a rotation); for inverted or nearly singular F
+/// from Eigen's JacobiSVD (MPL2).
 Polar polar_decomposition(const Mat3& F);
 
 }  // namespace shatter

@@ -18,8 +18,10 @@ namespace shatter {
 /// needs 18 multiplications instead of 27, and so does the force product. Energy and forces do not
 /// depend on this rotation of the material frame (F' = F Q^T, S' = Q S Q^T, P' Dm'^-T = P Dm^-T).
 struct FastTetData {
-  /// Per group of 4 consecutive tets, 7 rows of 4 lanes: R^-1 entries r00 r01 r02 r11 r12 r22 (1/m)
-  /// and the rest volume V (m^3); padding lanes are 0 (#groups x 7 x 4).
+  /// Per group of 4 consecutive tets, rows of 4 lanes; padding lanes are 0. StVK and corotated: 7
+  /// rows, R^-1 entries r00 r01 r02 r11 r12 r22 (1/m) of the QR-rotated rest frame and the rest
+  /// volume V (m^3) (#groups x 7 x 4). Linear (not rotation invariant): 10 rows, Dm^-1 row by row
+  /// (1/m) and V (#groups x 10 x 4).
   std::vector<double> packed;
   /// Fixed blocks of tets (independent of the thread count). Each block accumulates its tets'
   /// forces into its own compact node buffer in tet order; nodes then gather their entries.

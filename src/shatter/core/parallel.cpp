@@ -37,10 +37,10 @@ struct Job {
   std::int64_t chunks = 0;
   void (*call)(void*, std::int64_t) = nullptr;
   void* context = nullptr;
-  int helpers_wanted = 0;           // workers that may join (threads - 1)
-  std::atomic<int> helpers{0};      // workers that joined
+  int helpers_wanted = 0;       // workers that may join (threads - 1)
+  std::atomic<int> helpers{0};  // workers that joined
   std::atomic<std::int64_t> next{0};
-  std::atomic<int> done{0};         // finished chunks (chunks <= 8 kMaxThreads fits an int)
+  std::atomic<int> done{0};  // finished chunks (chunks <= 8 kMaxThreads fits an int)
 
   void work() {
     for (;;) {

@@ -23,10 +23,21 @@ std::array<double, 6> rotated_rest_inverse(const TetRest& rest) {
   return {Rinv(0, 0), Rinv(0, 1), Rinv(0, 2), Rinv(1, 1), Rinv(1, 2), Rinv(2, 2)};
 }
 
+// Rows per tet of FastTetData::packed: StVK (and corotated, which does not read it) keep R^-1 of
+// the rotated rest frame and V; the linear model, which is not rotation invariant, Dm^-1 and V.
+int packed_rows(ModelKind kind) { return kind == ModelKind::linear ? 10 : 7; }
+
 void store_fast_rest(FemModel& model, std::size_t e) {
   const TetRest& r = model.rest[e];
+  const int rows = packed_rows(model.model);
+  double* group = model.fast.packed.data() + static_cast<std::size_t>(rows) * (e / 4 * 4) + e % 4;
+  if (model.model == ModelKind::linear) {
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) group[4 * (3 * i + j)] = r.Dm_inv(i, j);
+    group[36] = r.volume;
+    return;
+  }
   const std::array<double, 6> ri = rotated_rest_inverse(r);
-  double* group = model.fast.packed.data() + 7 * (e / 4 * 4) + e % 4;
   for (int c = 0; c < 6; ++c) group[4 * c] = ri[static_cast<std::size_t>(c)];
   group[24] = r.volume;
 }
@@ -153,6 +164,71 @@ void stvk_forces_block(const double* packed, const TetIndices* tets, const std::
   }
 }
 
+// Linear (small-strain) forces of the tets [lo, hi) of one block (lo a multiple of 4): F = Ds Dm^-1,
+// eps = (F + F^T)/2 - I, V P = V (2 mu eps + lambda tr(eps) I), [f1 f2 f3] = V P Dm^-T,
+// f0 = -(f1 + f2 + f3); added into the block's slots in tet order (docs/method.md §2.2).
+[[gnu::target_clones("avx2", "default")]]
+void linear_forces_block(const double* packed, const TetIndices* tets, const std::int32_t* corner_slot, const Vec3* x,
+                         std::int64_t lo, std::int64_t hi, double mu, double lambda, double* slots) {
+  for (std::int64_t g0 = lo; g0 < hi; g0 += 4) {
+    const int lanes = static_cast<int>(std::min<std::int64_t>(4, hi - g0));
+    const Vec3* c[4][4];  // [lane][corner]
+    for (int l = 0; l < 4; ++l) {
+      const TetIndices& t = tets[g0 + (l < lanes ? l : 0)];
+      for (int k = 0; k < 4; ++k) c[l][k] = &x[t[k]];
+    }
+    // clang-format off
+#define SHATTER_EDGE(k, a) \
+  Lanes{(*c[0][k])[a] - (*c[0][0])[a], (*c[1][k])[a] - (*c[1][0])[a], \
+        (*c[2][k])[a] - (*c[2][0])[a], (*c[3][k])[a] - (*c[3][0])[a]}
+    const double* r = packed + 10 * g0;  // 10 lane vectors per group of 4 tets
+#define SHATTER_LOAD(p) Lanes{(p)[0], (p)[1], (p)[2], (p)[3]}
+    // clang-format on
+    // M = Dm^-1, row-major.
+    const Lanes m00 = SHATTER_LOAD(r), m01 = SHATTER_LOAD(r + 4), m02 = SHATTER_LOAD(r + 8);
+    const Lanes m10 = SHATTER_LOAD(r + 12), m11 = SHATTER_LOAD(r + 16), m12 = SHATTER_LOAD(r + 20);
+    const Lanes m20 = SHATTER_LOAD(r + 24), m21 = SHATTER_LOAD(r + 28), m22 = SHATTER_LOAD(r + 32);
+    const Lanes vol = SHATTER_LOAD(r + 36);
+#undef SHATTER_LOAD
+    // Ds columns d0 d1 d2 (edges from corner 0).
+    const Lanes d0x = SHATTER_EDGE(1, 0), d0y = SHATTER_EDGE(1, 1), d0z = SHATTER_EDGE(1, 2);
+    const Lanes d1x = SHATTER_EDGE(2, 0), d1y = SHATTER_EDGE(2, 1), d1z = SHATTER_EDGE(2, 2);
+    const Lanes d2x = SHATTER_EDGE(3, 0), d2y = SHATTER_EDGE(3, 1), d2z = SHATTER_EDGE(3, 2);
+#undef SHATTER_EDGE
+    // F = Ds M: F(i, j) = d0_i m0j + d1_i m1j + d2_i m2j.
+    const Lanes fxx = d0x * m00 + d1x * m10 + d2x * m20, fxy = d0x * m01 + d1x * m11 + d2x * m21,
+                fxz = d0x * m02 + d1x * m12 + d2x * m22;
+    const Lanes fyx = d0y * m00 + d1y * m10 + d2y * m20, fyy = d0y * m01 + d1y * m11 + d2y * m21,
+                fyz = d0y * m02 + d1y * m12 + d2y * m22;
+    const Lanes fzx = d0z * m00 + d1z * m10 + d2z * m20, fzy = d0z * m01 + d1z * m11 + d2z * m21,
+                fzz = d0z * m02 + d1z * m12 + d2z * m22;
+    // V P, symmetric: diagonal 2 mu V (F_ii - 1) + lambda V tr(eps), off-diagonal mu V (F_ij + F_ji).
+    const Lanes vmu = vol * mu, vl = vol * lambda;
+    const Lanes ltr = vl * ((fxx - 1.0) + (fyy - 1.0) + (fzz - 1.0));
+    const Lanes pxx = 2.0 * vmu * (fxx - 1.0) + ltr, pyy = 2.0 * vmu * (fyy - 1.0) + ltr,
+                pzz = 2.0 * vmu * (fzz - 1.0) + ltr;
+    const Lanes pxy = vmu * (fxy + fyx), pxz = vmu * (fxz + fzx), pyz = vmu * (fyz + fzy);
+    // f_k (k = 1, 2, 3) = V P M^T column k-1, i.e. V P (row k-1 of M).
+    const Lanes f1x = pxx * m00 + pxy * m01 + pxz * m02, f1y = pxy * m00 + pyy * m01 + pyz * m02,
+                f1z = pxz * m00 + pyz * m01 + pzz * m02;
+    const Lanes f2x = pxx * m10 + pxy * m11 + pxz * m12, f2y = pxy * m10 + pyy * m11 + pyz * m12,
+                f2z = pxz * m10 + pyz * m11 + pzz * m12;
+    const Lanes f3x = pxx * m20 + pxy * m21 + pxz * m22, f3y = pxy * m20 + pyy * m21 + pyz * m22,
+                f3z = pxz * m20 + pyz * m21 + pzz * m22;
+    const Lanes out[12] = {
+        -(f1x + f2x + f3x), -(f1y + f2y + f3y), -(f1z + f2z + f3z), f1x, f1y, f1z, f2x, f2y, f2z, f3x, f3y, f3z};
+    for (int l = 0; l < lanes; ++l) {
+      const std::int32_t* cs = corner_slot + 4 * (g0 + l);
+      for (int k = 0; k < 4; ++k) {
+        double* s = slots + cs[k];
+        s[0] += out[3 * k][l];
+        s[1] += out[3 * k + 1][l];
+        s[2] += out[3 * k + 2][l];
+      }
+    }
+  }
+}
+
 }  // namespace detail
 #pragma GCC diagnostic pop
 
@@ -166,7 +242,7 @@ FemModel make_fem_model(const TetMesh& rest_mesh, const Material& material, Mode
   const std::size_t n_tets = model.tets.size();
   model.rest.resize(n_tets);
   model.node_mass.assign(static_cast<std::size_t>(model.num_nodes), 0.0);
-  model.fast.packed.assign(7 * ((n_tets + 3) / 4 * 4), 0.0);
+  model.fast.packed.assign(static_cast<std::size_t>(packed_rows(kind)) * ((n_tets + 3) / 4 * 4), 0.0);
   for (std::size_t e = 0; e < n_tets; ++e) {
     const TetRest r = tet_rest(rest_mesh.corners(static_cast<Index>(e)));
     model.rest[e] = r;
@@ -238,6 +314,11 @@ void internal_forces(const FemModel& model, const std::vector<Vec3>& x, std::vec
         if (model.model == ModelKind::stvk) {
           detail::stvk_forces_block(fd.packed.data(), model.tets.data(), fd.corner_slot.data(), xp, lo, hi,
                                     model.lame.mu, model.lame.lambda, slots);
+          return;
+        }
+        if (model.model == ModelKind::linear) {
+          detail::linear_forces_block(fd.packed.data(), model.tets.data(), fd.corner_slot.data(), xp, lo, hi,
+                                      model.lame.mu, model.lame.lambda, slots);
           return;
         }
         for (std::int64_t e = lo; e < hi; ++e) {
