@@ -107,7 +107,8 @@ int run_static(const StaticArgs& args) {
                    {"linear_solver", to_string(options.linear.kind)},
                    {"linear_iterations", report.linear_iterations_total},
                    {"tangent", to_string(options.tangent)},
-                   {"projected_iterations", report.projected_iterations}};
+                   {"projected_iterations", report.projected_iterations},
+                   {"direct_iterations", report.direct_iterations}};
     // One entry per Newton iteration (then the final residual): load fraction, relative residual
     // before the step, accepted step length, projected stiffness, PCG iterations.
     nlohmann::ordered_json history = nlohmann::ordered_json::array();
@@ -116,6 +117,7 @@ int run_static(const StaticArgs& args) {
                          {"relative_residual", it.relative_residual},
                          {"step_length", it.step_length},
                          {"projected", it.projected},
+                         {"direct", it.direct},
                          {"linear_iterations", it.linear_iterations}});
     j["solver"]["history"] = std::move(history);
     const Vec3& u = results.displacement[maxu];
@@ -189,9 +191,12 @@ int run_static(const StaticArgs& args) {
   s += fmt::format("loads       {} N nodal", vec_text(resolved.total_load));
   if (problem.gravity) s += fmt::format(", {} N gravity", vec_text(gravity_load));
   s += "\n";
+  std::string linear = to_string(options.linear.kind);
+  if (report.direct_iterations > 0 && options.linear.kind != LinearSolverKind::direct_ldlt)
+    linear += fmt::format(", direct for {} where cheaper", report.direct_iterations);
+  if (report.projected_iterations > 0) linear += fmt::format("; {} projected", report.projected_iterations);
   s += fmt::format("solver      converged: {} Newton iteration(s), {} load step(s), relative residual {:.3g} ({})\n",
-                   report.newton_iterations, report.load_steps, report.relative_residual,
-                   to_string(options.linear.kind));
+                   report.newton_iterations, report.load_steps, report.relative_residual, linear);
   s += fmt::format("max |u|     {:.6g} m at node {} (u = {} m)\n", results.max_displacement, mesh.node_id(maxu),
                    vec_text(results.displacement[maxu]));
   s += fmt::format("max sigma1  {:.6g} Pa in element {} (direction {})\n", results.max_principal_stress,

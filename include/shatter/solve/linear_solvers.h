@@ -56,6 +56,24 @@ struct LinearSolveReport {
   std::string message;  ///< why it did not converge ("" when it did)
 };
 
+namespace detail {
+/// Eigen's simplicial LDL^T with the column counts of its symbolic analysis made readable.
+class CountingLdlt : public Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
+ public:
+  /// Nonzeros of L below the diagonal (after analyzePattern).
+  [[nodiscard]] double factor_nonzeros() const;
+  /// About the multiply-adds of one numeric factorization: sum over columns of count^2.
+  [[nodiscard]] double factor_flops() const;
+};
+}  // namespace detail
+
+/// What a direct solve of a pattern would cost (LinearSolver::direct_cost), from its symbolic
+/// analysis: deterministic, unlike a time.
+struct DirectCost {
+  double factor_flops = 0;     ///< multiply-adds of the numeric factorization
+  double factor_nonzeros = 0;  ///< nonzeros of L (a solve reads each twice)
+};
+
 /// A reusable solver: keeps the symbolic factorization (per pattern_id) and the work vectors.
 class LinearSolver {
  public:
@@ -73,6 +91,10 @@ class LinearSolver {
   /// stops early (iteration limit, CG breakdown) leaves its last iterate. converged is false then.
   LinearSolveReport solve(const BlockSparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x);
 
+  /// The direct solver's cost on a's pattern; analyses the pattern if it is new (and keeps the
+  /// analysis for a later direct solve).
+  DirectCost direct_cost(const BlockSparseMatrix& a);
+
   /// Symbolic analyses done so far (the direct solver does one per new pattern).
   [[nodiscard]] int symbolic_analyses() const { return symbolic_analyses_; }
 
@@ -83,7 +105,9 @@ class LinearSolver {
   void apply_preconditioner(const BlockSparseMatrix& a, const Eigen::VectorXd& r, Eigen::VectorXd& z) const;
 
   LinearSolverOptions options_;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt_;
+  void analyze(const BlockSparseMatrix& a, LinearSolveReport* report);
+
+  detail::CountingLdlt ldlt_;
   std::uint64_t analyzed_pattern_ = 0;
   int symbolic_analyses_ = 0;
   std::vector<Mat3> diagonal_inverse_;  ///< inverse diagonal blocks (#active)

@@ -53,6 +53,9 @@ Result<TangentKind> parse_tangent_kind(std::string_view name);
 inline constexpr int kEasyLoadStep = 4;
 /// Iterations above this many make the next load step smaller.
 inline constexpr int kHardLoadStep = 10;
+/// PCG iterations of one Newton step from which StaticSolverOptions::direct_when_cheaper weighs a
+/// factorization.
+inline constexpr int kMinIterationsForDirect = 50;
 
 /// Settings of the Newton solver.
 struct StaticSolverOptions {
@@ -91,6 +94,11 @@ struct StaticSolverOptions {
   double intermediate_tolerance = 1e-3;
   /// Keep one record per Newton iteration in StaticReport::history.
   bool record_history = true;
+  /// With an iterative linear solver: when a Newton step's PCG took at least
+  /// kMinIterationsForDirect iterations, compare its cost with a factorization's (from the symbolic
+  /// analysis: multiply-adds, deterministic) and use the direct solver for the rest of the solves
+  /// on this pattern when that is cheaper (slender parts, soft materials: ill-conditioned systems).
+  bool direct_when_cheaper = true;
   /// PCG: the first Newton step of a load step starts from the previous first step d, scaled by
   /// (r.d)/(d.K d) (the energy-norm optimal multiple: never a worse start than zero). Repeated
   /// impacts at one place with other magnitudes then need few iterations.
@@ -130,6 +138,7 @@ struct NewtonIteration {
   double relative_residual = 0;  ///< before the step, against the full load's reference
   double step_length = 0;        ///< the line search's accepted fraction of the Newton step (0: none)
   bool projected = false;        ///< solved with the projected stiffness
+  bool direct = false;           ///< solved with the direct linear solver
   int linear_iterations = 0;     ///< PCG iterations (0 for the direct solver), all tries together
 };
 
@@ -143,6 +152,7 @@ struct StaticReport {
   int linear_iterations_total = 0;  ///< PCG iterations over all Newton iterations
   int line_search_cuts = 0;         ///< step halvings by the line search
   int projected_iterations = 0;     ///< Newton iterations that used the projected stiffness
+  int direct_iterations = 0;        ///< Newton iterations solved with the direct solver
   int load_step_failures = 0;       ///< load steps retried at half the size
   /// Every Newton iteration, then one last entry with the final residual (step_length 0), when
   /// StaticSolverOptions::record_history.
@@ -224,6 +234,8 @@ class StaticSolver {
   std::vector<double> force_error_;      ///< squared round-off estimate per component of force_, N^2 (#nodes)
   std::vector<double> tet_force_error_;  ///< round-off estimate per force component per active tet, N
   Eigen::VectorXd first_step_;           ///< first Newton step of the last load step (#DOFs)
+  bool direct_checked_ = false;          ///< direct_when_cheaper weighed the factorization for this pattern
+  bool prefer_direct_ = false;           ///< ... and found it cheaper than PCG
 };
 
 /// One-off solve (builds a StaticSolver).

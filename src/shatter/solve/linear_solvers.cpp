@@ -59,15 +59,39 @@ LinearSolveReport LinearSolver::solve(const BlockSparseMatrix& a, const Eigen::V
   return report;
 }
 
+namespace detail {
+
+double CountingLdlt::factor_nonzeros() const {
+  double n = 0;
+  for (const auto count : m_nonZerosPerCol) n += static_cast<double>(count);
+  return n;
+}
+
+double CountingLdlt::factor_flops() const {
+  double f = 0;
+  for (const auto count : m_nonZerosPerCol) f += static_cast<double>(count) * static_cast<double>(count);
+  return f;
+}
+
+}  // namespace detail
+
+void LinearSolver::analyze(const BlockSparseMatrix& a, LinearSolveReport* report) {
+  // The ordering and elimination tree depend only on the pattern: analyse once per pattern.
+  if (analyzed_pattern_ == a.pattern_id()) return;
+  ldlt_.analyzePattern(a.matrix());
+  analyzed_pattern_ = a.pattern_id();
+  ++symbolic_analyses_;
+  if (report != nullptr) report->analyzed = true;
+}
+
+DirectCost LinearSolver::direct_cost(const BlockSparseMatrix& a) {
+  analyze(a, nullptr);
+  return {.factor_flops = ldlt_.factor_flops(), .factor_nonzeros = ldlt_.factor_nonzeros()};
+}
+
 LinearSolveReport LinearSolver::solve_direct(const BlockSparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   LinearSolveReport report;
-  // The ordering and elimination tree depend only on the pattern: analyse once per pattern.
-  if (analyzed_pattern_ != a.pattern_id()) {
-    ldlt_.analyzePattern(a.matrix());
-    analyzed_pattern_ = a.pattern_id();
-    ++symbolic_analyses_;
-    report.analyzed = true;
-  }
+  analyze(a, &report);
   ldlt_.factorize(a.matrix());
   if (ldlt_.info() != Eigen::Success) {
     x.setZero(a.size());

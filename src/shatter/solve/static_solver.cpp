@@ -82,6 +82,8 @@ void StaticSolver::update_pattern(const FemModel& model, const std::vector<Ancho
     return;
   matrix_ = BlockSparseMatrix(model.num_nodes, model.tets, anchors);
   first_step_.resize(0);
+  direct_checked_ = false;
+  prefer_direct_ = false;
   pattern_tets_ = model.tets;
   pattern_anchors_ = anchors;
   has_pattern_ = true;
@@ -178,7 +180,8 @@ struct StaticSolver::SolveState {
   double round_off = 0;             ///< estimated round-off in ||r|| at the last residual evaluation, N
   double energy = std::numeric_limits<double>::quiet_NaN();  ///< U(x) of the active tets, J (NaN: not yet known)
   std::vector<Vec3> x_trial;                                 ///< line-search trial positions, m (#nodes)
-  double step_length = 0;  ///< the last line search's accepted fraction of the step (0: none)
+  double step_length = 0;    ///< the last line search's accepted fraction of the step (0: none)
+  bool last_direct = false;  ///< the last linear solve was the direct one
   StaticReport report;
 };
 
@@ -397,6 +400,7 @@ StaticSolver::Outcome StaticSolver::newton_iteration(SolveState& st, double s, i
     if (options_.record_history) st.report.history.push_back(record);
     ++st.report.newton_iterations;
     if (record.projected) ++st.report.projected_iterations;
+    if (record.direct) ++st.report.direct_iterations;
     return outcome;
   };
   // Project on demand: the exact stiffness first (quadratic convergence where it is positive
@@ -406,6 +410,7 @@ StaticSolver::Outcome StaticSolver::newton_iteration(SolveState& st, double s, i
     bool indefinite = false;
     Outcome direction = newton_direction(st, iteration, relative_residual, false, indefinite);
     if (!on_demand && !direction.ok()) return finish(std::move(direction));
+    record.direct = st.last_direct;
     if (direction.ok() && !(on_demand && indefinite)) {
       Outcome step = line_search(st, s);
       record.step_length = st.step_length;
@@ -418,6 +423,7 @@ StaticSolver::Outcome StaticSolver::newton_iteration(SolveState& st, double s, i
     return finish(std::move(direction));
   Outcome step = line_search(st, s);
   record.step_length = st.step_length;
+  record.direct = st.last_direct;
   return finish(std::move(step));
 }
 
@@ -437,10 +443,11 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
   // Inexact Newton: the linear residual need only be a tenth of what the Newton tolerance
   // allows, ||K dx - r|| <= 0.1 tol reference (never tighter than the linear option).
   LinearSolverOptions linear = options_.linear;
+  if (prefer_direct_) linear.kind = LinearSolverKind::direct_ldlt;
   linear.relative_tolerance =
       std::max(linear.relative_tolerance,
                std::min(0.5, 0.1 * options_.relative_residual_tolerance / std::max(relative_residual, 1e-300)));
-  const bool pcg = linear.kind != LinearSolverKind::direct_ldlt;
+  bool pcg = linear.kind != LinearSolverKind::direct_ldlt;
   linear.warm_start = false;
   if (pcg && iteration == 0 && options_.warm_start && first_step_.size() == st.r.size()) {
     matrix_.multiply(first_step_, st.dx);
@@ -450,15 +457,51 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
       linear.warm_start = true;
     }
   }
+  // direct_when_cheaper: PCG gets kMinIterationsForDirect iterations first. A system it cannot
+  // solve in those is ill-conditioned; then a factorization is weighed against that many more PCG
+  // iterations (its cost from the symbolic analysis, deterministic): one PCG iteration is a
+  // matrix-vector product, two Gauss-Seidel (or one Jacobi) sweeps over the stored values and a few
+  // vector updates; a factorization costs its multiply-adds (counted twice: a simplicial
+  // factorization streams memory less well) and two triangular solves. The direct solver then
+  // solves this step and the rest of the solves on this pattern; else PCG goes on from where it is.
+  const int max_pcg = linear.max_iterations;
+  const bool weigh = pcg && options_.direct_when_cheaper && !direct_checked_ && max_pcg > kMinIterationsForDirect;
+  if (weigh) linear.max_iterations = kMinIterationsForDirect;
   linear_.set_options(linear);
-  const LinearSolveReport lin = linear_.solve(matrix_, st.r, st.dx);
+  LinearSolveReport lin = linear_.solve(matrix_, st.r, st.dx);
+  if (weigh && !lin.converged && !lin.indefinite && lin.iterations == kMinIterationsForDirect) {
+    direct_checked_ = true;
+    const auto t = Clock::now();
+    const DirectCost direct = linear_.direct_cost(matrix_);
+    st.report.linear_solve_ms += ms_since(t);
+    // The iterations PCG still needs, from the rate of its first ones (relative residual = rate^k),
+    // at most its iteration limit. A residual that did not drop at all (CG's residual is not
+    // monotone) counts as the whole limit.
+    const double reached = std::clamp(lin.relative_residual, 1e-300, 0.999);
+    const double remaining = std::min(
+        static_cast<double>(max_pcg - kMinIterationsForDirect),
+        kMinIterationsForDirect * std::max(1.0, std::log(linear.relative_tolerance) / std::log(reached) - 1.0));
+    const double pcg_cost = remaining * (4.0 * matrix_.num_values() + 10.0 * matrix_.size());
+    prefer_direct_ = 2.0 * direct.factor_flops + 4.0 * direct.factor_nonzeros < pcg_cost;
+    st.report.linear_solve_ms += lin.time_ms;
+    st.report.linear_iterations_total += lin.iterations;
+    if (prefer_direct_) {
+      linear.kind = LinearSolverKind::direct_ldlt;
+      pcg = false;
+    } else {
+      linear.max_iterations = max_pcg - lin.iterations;
+      linear.warm_start = true;
+    }
+    linear_.set_options(linear);
+    lin = linear_.solve(matrix_, st.r, st.dx);
+  }
   indefinite = lin.indefinite;
+  st.last_direct = !pcg;
   st.report.linear_solve_ms += lin.time_ms;
   st.report.linear_iterations_total += lin.iterations;
   if (iteration == 0 && st.dx.allFinite() && !lin.indefinite) first_step_ = st.dx;
   // An unconverged PCG still gives a usable (inexact Newton) direction; a failed one does not.
-  if (!lin.converged && options_.linear.kind == LinearSolverKind::direct_ldlt)
-    return {SolveStatus::linear_solve_failed, "linear solve failed: " + lin.message};
+  if (!lin.converged && !pcg) return {SolveStatus::linear_solve_failed, "linear solve failed: " + lin.message};
   if (!st.dx.allFinite() || st.dx.squaredNorm() == 0.0)
     return {SolveStatus::linear_solve_failed, "linear solve failed: " + lin.message};
   return {};
