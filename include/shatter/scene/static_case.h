@@ -76,7 +76,8 @@ struct ResolvedStaticCase {
   std::vector<std::uint8_t> held;  ///< held components per node, bits as AnchorSpec (#nodes)
   std::vector<Vec3> prescribed;    ///< rest position + prescribed displacement, m (#nodes)
   std::vector<Vec3> forces;        ///< external nodal forces without gravity, N (#nodes)
-  Vec3 total_load = Vec3::Zero();  ///< sum of `forces`, N
+  /// Sum of the applied part of `forces` (free components of nodes some tet uses), N.
+  Vec3 total_load = Vec3::Zero();
   Index num_held_nodes = 0;        ///< nodes with at least one held component
   /// Loads (partly or wholly) on held components or on nodes no tet uses, whose force there is not
   /// applied: one line each, naming the file and the load.

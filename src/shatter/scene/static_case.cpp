@@ -514,7 +514,10 @@ Result<ResolvedStaticCase> resolve_static_case(const StaticCase& c, const TetMes
                              "and is not applied");
     }
   }
-  for (const Vec3& f : out.forces) out.total_load += f;
+  // The summary's total is what is applied: free components of nodes some tet uses.
+  for (std::size_t i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k)
+      if (used[i] && !(out.held[i] & (1u << k))) out.total_load[k] += out.forces[i][k];
 
   // Every connected piece of the mesh must be held against rigid motion.
   const Components comps = connected_components(mesh);
