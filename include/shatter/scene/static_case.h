@@ -78,7 +78,7 @@ struct ResolvedStaticCase {
   std::vector<Vec3> forces;        ///< external nodal forces without gravity, N (#nodes)
   /// Sum of the applied part of `forces` (free components of nodes some tet uses), N.
   Vec3 total_load = Vec3::Zero();
-  Index num_held_nodes = 0;        ///< nodes with at least one held component
+  Index num_held_nodes = 0;  ///< nodes with at least one held component
   /// Loads (partly or wholly) on held components or on nodes no tet uses, whose force there is not
   /// applied: one line each, naming the file and the load.
   std::vector<std::string> warnings;
