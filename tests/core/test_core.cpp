@@ -1,9 +1,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <filesystem>
 #include <fstream>
 #include <numeric>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
@@ -118,6 +120,31 @@ TEST(Parallel, NestedLoopsAndConcurrentCallersFinish) {
   other.join();
   EXPECT_EQ(std::count(a.begin(), a.end(), 50.0), 20000);
   EXPECT_EQ(std::count(b.begin(), b.end(), 100.0), 20000);
+  set_num_threads(saved);
+}
+
+TEST(Parallel, AnExceptionReachesTheCallerAfterEveryChunkStopped) {
+  // A loop body that throws: the caller gets the exception only once no chunk runs any more (they
+  // use its stack), and the pool stays usable.
+  const int saved = num_threads();
+  set_num_threads(4);
+  std::vector<std::atomic<int>> hits(4000);
+  EXPECT_THROW(parallel_for(
+                   0, 4000,
+                   [&](std::int64_t i) {
+                     if (i == 1234) throw std::runtime_error("chunk failed");
+                     hits[static_cast<std::size_t>(i)].fetch_add(1);
+                   },
+                   1),
+               std::runtime_error);
+  for (const std::atomic<int>& h : hits) EXPECT_LE(h.load(), 1);
+  std::vector<int> again(4000, 0);
+  parallel_for(0, 4000, [&](std::int64_t i) { again[static_cast<std::size_t>(i)] = 1; }, 1);
+  EXPECT_EQ(std::count(again.begin(), again.end(), 1), 4000);
+  EXPECT_FALSE(detail::in_parallel_region());
+  set_num_threads(1);
+  EXPECT_THROW(parallel_for(0, 10, [](std::int64_t) { throw std::runtime_error("serial"); }, 1), std::runtime_error);
+  EXPECT_FALSE(detail::in_parallel_region());
   set_num_threads(saved);
 }
 

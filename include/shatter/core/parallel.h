@@ -32,7 +32,9 @@ void run_chunks(std::int64_t chunks, void (*call)(void*, std::int64_t), void* co
 bool in_parallel_region();
 }  // namespace detail
 
-/// for i in [begin, end): body(i). Iterations must be independent. Runs in parallel only when
+/// for i in [begin, end): body(i). Iterations must be independent. An exception thrown by body
+/// reaches the caller once every chunk has stopped (the first one thrown; the rest of the chunks
+/// still run). Runs in parallel only when
 /// end - begin >= min_parallel: waking workers and handing out chunks costs a few microseconds, so
 /// only loops with a few hundred microseconds of work should choose a threshold that lets them go
 /// parallel.

@@ -5,9 +5,11 @@
 #include <atomic>
 #include <condition_variable>
 #include <cstdlib>
+#include <exception>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <system_error>
 #include <thread>
 
 namespace shatter {
@@ -41,12 +43,21 @@ struct Job {
   std::atomic<int> helpers{0};  // workers that joined
   std::atomic<std::int64_t> next{0};
   std::atomic<int> done{0};  // finished chunks (chunks <= 8 kMaxThreads fits an int)
+  std::mutex error_mutex;
+  std::exception_ptr error;  // the first exception a chunk threw (rethrown by the caller)
 
   void work() {
     for (;;) {
       const std::int64_t c = next.fetch_add(1, std::memory_order_relaxed);
       if (c >= chunks) return;
-      call(context, c);
+      // A chunk that throws still counts as done, so the caller never waits forever and never
+      // returns (freeing what the loop body refers to) while another chunk runs.
+      try {
+        call(context, c);
+      } catch (...) {
+        const std::lock_guard<std::mutex> lock(error_mutex);
+        if (!error) error = std::current_exception();
+      }
       if (done.fetch_add(1, std::memory_order_acq_rel) + 1 == chunks) done.notify_all();
     }
   }
@@ -76,15 +87,24 @@ class Pool {
       if (job->done.load(std::memory_order_acquire) == chunks) break;
     for (int d = job->done.load(std::memory_order_acquire); d != chunks; d = job->done.load(std::memory_order_acquire))
       job->done.wait(d, std::memory_order_acquire);
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (current_ == job) current_.reset();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (current_ == job) current_.reset();
+    }
+    if (job->error) std::rethrow_exception(job->error);
   }
 
  private:
   // Start workers up to `count` (called with mutex_ held).
+  // A thread the system refuses (a process or memory limit) leaves the pool smaller: the caller
+  // and the workers it has do the chunks.
   void grow(int count) {
     while (static_cast<int>(workers_.size()) < count) {
-      workers_.emplace_back([this] { worker(); });
+      try {
+        workers_.emplace_back([this] { worker(); });
+      } catch (const std::system_error&) {
+        return;
+      }
       workers_.back().detach();
     }
   }
@@ -146,10 +166,12 @@ void run_chunks(std::int64_t chunks, void (*call)(void*, std::int64_t), void* co
 #else
   (void)threads;
 #endif
-  const bool outer = t_in_parallel;
+  struct Restore {
+    bool outer = t_in_parallel;
+    ~Restore() { t_in_parallel = outer; }
+  } restore;
   t_in_parallel = true;
   for (std::int64_t c = 0; c < chunks; ++c) call(context, c);
-  t_in_parallel = outer;
 }
 
 }  // namespace detail
