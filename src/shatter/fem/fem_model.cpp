@@ -84,13 +84,49 @@ void build_blocks(FemModel& model) {
 // Four tets at a time: every double below holds one value per lane (GCC vector extension; with
 // -ffp-contract=off each lane is computed exactly as the scalar formula would be, so the SSE2 and AVX2
 // versions give the same bits).
-// Vectors only live inside stvk_forces_block (loads are built in place, no helper function takes or
-// returns one), so none crosses a call; GCC's -Wpsabi warns about the call ABI of such vectors.
+// Vectors only live inside the force kernels (loads are built in place; the always-inlined helpers
+// take them by pointer), so none crosses a call by value; GCC's -Wpsabi warns about the call ABI of
+// such vectors.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wpsabi"
 typedef double Lanes __attribute__((vector_size(4 * sizeof(double))));
 
+// The four kernels' shared steps. Always inlined into each target clone (the AVX2 clone then
+// compiles them for AVX2 too); they take vectors only by pointer.
+
+// c[lane][corner]: the corners of tets g0 .. g0 + 3; padding lanes repeat the first tet.
+[[gnu::always_inline]] inline void gather_corners(const TetIndices* tets, const Vec3* x, std::int64_t g0, int lanes,
+                                                  const Vec3* (&c)[4][4]) {
+  for (int l = 0; l < 4; ++l) {
+    const TetIndices& t = tets[g0 + (l < lanes ? l : 0)];
+    for (int k = 0; k < 4; ++k) c[l][k] = &x[t[k]];
+  }
+}
+
+// Add the corner forces out[3 k + axis] (one lane per tet) into the block's slots, in tet order.
+[[gnu::always_inline]] inline void scatter_corner_forces(const Lanes* out, const std::int32_t* corner_slot,
+                                                         std::int64_t g0, int lanes, double* slots) {
+  for (int l = 0; l < lanes; ++l) {
+    const std::int32_t* cs = corner_slot + 4 * (g0 + l);
+    for (int k = 0; k < 4; ++k) {
+      double* s = slots + cs[k];
+      s[0] += out[3 * k][l];
+      s[1] += out[3 * k + 1][l];
+      s[2] += out[3 * k + 2][l];
+    }
+  }
+}
+
 }  // namespace
+
+// Edge k - 0 of each lane's tet along axis a (Ds built in registers: no store-to-load forwarding
+// stalls), and four consecutive packed values as one lane vector.
+// clang-format off
+#define SHATTER_EDGE(k, a) \
+  Lanes{(*c[0][k])[a] - (*c[0][0])[a], (*c[1][k])[a] - (*c[1][0])[a], \
+        (*c[2][k])[a] - (*c[2][0])[a], (*c[3][k])[a] - (*c[3][0])[a]}
+#define SHATTER_LOAD(p) Lanes{(p)[0], (p)[1], (p)[2], (p)[3]}
+// clang-format on
 
 namespace detail {
 
@@ -102,27 +138,14 @@ void stvk_forces_block(const double* packed, const TetIndices* tets, const std::
                        std::int64_t lo, std::int64_t hi, double mu, double lambda, double* slots) {
   for (std::int64_t g0 = lo; g0 < hi; g0 += 4) {
     const int lanes = static_cast<int>(std::min<std::int64_t>(4, hi - g0));
-    // Gather Ds = [x1 - x0, x2 - x0, x3 - x0] per lane (built in registers: no store-to-load
-    // forwarding stalls).
     const Vec3* c[4][4];  // [lane][corner]
-    for (int l = 0; l < 4; ++l) {
-      const TetIndices& t = tets[g0 + (l < lanes ? l : 0)];
-      for (int k = 0; k < 4; ++k) c[l][k] = &x[t[k]];
-    }
-    // clang-format off
-#define SHATTER_EDGE(k, a) \
-  Lanes{(*c[0][k])[a] - (*c[0][0])[a], (*c[1][k])[a] - (*c[1][0])[a], \
-        (*c[2][k])[a] - (*c[2][0])[a], (*c[3][k])[a] - (*c[3][0])[a]}
+    gather_corners(tets, x, g0, lanes, c);
     const double* r = packed + 7 * g0;  // 7 lane vectors per group of 4 tets
-#define SHATTER_LOAD(p) Lanes{(p)[0], (p)[1], (p)[2], (p)[3]}
-    // clang-format on
     const Lanes r00 = SHATTER_LOAD(r), r01 = SHATTER_LOAD(r + 4), r02 = SHATTER_LOAD(r + 8), r11 = SHATTER_LOAD(r + 12),
                 r12 = SHATTER_LOAD(r + 16), r22 = SHATTER_LOAD(r + 20), vol = SHATTER_LOAD(r + 24);
-#undef SHATTER_LOAD
     const Lanes d0x = SHATTER_EDGE(1, 0), d0y = SHATTER_EDGE(1, 1), d0z = SHATTER_EDGE(1, 2);
     const Lanes d1x = SHATTER_EDGE(2, 0), d1y = SHATTER_EDGE(2, 1), d1z = SHATTER_EDGE(2, 2);
     const Lanes d2x = SHATTER_EDGE(3, 0), d2y = SHATTER_EDGE(3, 1), d2z = SHATTER_EDGE(3, 2);
-#undef SHATTER_EDGE
     // F' columns a, b, c.
     const Lanes ax = d0x * r00, ay = d0y * r00, az = d0z * r00;
     const Lanes bx = d0x * r01 + d1x * r11, by = d0y * r01 + d1y * r11, bz = d0z * r01 + d1z * r11;
@@ -151,16 +174,7 @@ void stvk_forces_block(const double* packed, const TetIndices* tets, const std::
     const Lanes f3x = sx * r22, f3y = sy * r22, f3z = sz * r22;
     const Lanes out[12] = {
         -(f1x + f2x + f3x), -(f1y + f2y + f3y), -(f1z + f2z + f3z), f1x, f1y, f1z, f2x, f2y, f2z, f3x, f3y, f3z};
-    // Scatter in tet order.
-    for (int l = 0; l < lanes; ++l) {
-      const std::int32_t* cs = corner_slot + 4 * (g0 + l);
-      for (int k = 0; k < 4; ++k) {
-        double* s = slots + cs[k];
-        s[0] += out[3 * k][l];
-        s[1] += out[3 * k + 1][l];
-        s[2] += out[3 * k + 2][l];
-      }
-    }
+    scatter_corner_forces(out, corner_slot, g0, lanes, slots);
   }
 }
 
@@ -173,28 +187,17 @@ void linear_forces_block(const double* packed, const TetIndices* tets, const std
   for (std::int64_t g0 = lo; g0 < hi; g0 += 4) {
     const int lanes = static_cast<int>(std::min<std::int64_t>(4, hi - g0));
     const Vec3* c[4][4];  // [lane][corner]
-    for (int l = 0; l < 4; ++l) {
-      const TetIndices& t = tets[g0 + (l < lanes ? l : 0)];
-      for (int k = 0; k < 4; ++k) c[l][k] = &x[t[k]];
-    }
-    // clang-format off
-#define SHATTER_EDGE(k, a) \
-  Lanes{(*c[0][k])[a] - (*c[0][0])[a], (*c[1][k])[a] - (*c[1][0])[a], \
-        (*c[2][k])[a] - (*c[2][0])[a], (*c[3][k])[a] - (*c[3][0])[a]}
+    gather_corners(tets, x, g0, lanes, c);
     const double* r = packed + 10 * g0;  // 10 lane vectors per group of 4 tets
-#define SHATTER_LOAD(p) Lanes{(p)[0], (p)[1], (p)[2], (p)[3]}
-    // clang-format on
     // M = Dm^-1, row-major.
     const Lanes m00 = SHATTER_LOAD(r), m01 = SHATTER_LOAD(r + 4), m02 = SHATTER_LOAD(r + 8);
     const Lanes m10 = SHATTER_LOAD(r + 12), m11 = SHATTER_LOAD(r + 16), m12 = SHATTER_LOAD(r + 20);
     const Lanes m20 = SHATTER_LOAD(r + 24), m21 = SHATTER_LOAD(r + 28), m22 = SHATTER_LOAD(r + 32);
     const Lanes vol = SHATTER_LOAD(r + 36);
-#undef SHATTER_LOAD
     // Ds columns d0 d1 d2 (edges from corner 0).
     const Lanes d0x = SHATTER_EDGE(1, 0), d0y = SHATTER_EDGE(1, 1), d0z = SHATTER_EDGE(1, 2);
     const Lanes d1x = SHATTER_EDGE(2, 0), d1y = SHATTER_EDGE(2, 1), d1z = SHATTER_EDGE(2, 2);
     const Lanes d2x = SHATTER_EDGE(3, 0), d2y = SHATTER_EDGE(3, 1), d2z = SHATTER_EDGE(3, 2);
-#undef SHATTER_EDGE
     // F = Ds M: F(i, j) = d0_i m0j + d1_i m1j + d2_i m2j.
     const Lanes fxx = d0x * m00 + d1x * m10 + d2x * m20, fxy = d0x * m01 + d1x * m11 + d2x * m21,
                 fxz = d0x * m02 + d1x * m12 + d2x * m22;
@@ -217,19 +220,13 @@ void linear_forces_block(const double* packed, const TetIndices* tets, const std
                 f3z = pxz * m20 + pyz * m21 + pzz * m22;
     const Lanes out[12] = {
         -(f1x + f2x + f3x), -(f1y + f2y + f3y), -(f1z + f2z + f3z), f1x, f1y, f1z, f2x, f2y, f2z, f3x, f3y, f3z};
-    for (int l = 0; l < lanes; ++l) {
-      const std::int32_t* cs = corner_slot + 4 * (g0 + l);
-      for (int k = 0; k < 4; ++k) {
-        double* s = slots + cs[k];
-        s[0] += out[3 * k][l];
-        s[1] += out[3 * k + 1][l];
-        s[2] += out[3 * k + 2][l];
-      }
-    }
+    scatter_corner_forces(out, corner_slot, g0, lanes, slots);
   }
 }
 
 }  // namespace detail
+#undef SHATTER_EDGE
+#undef SHATTER_LOAD
 #pragma GCC diagnostic pop
 
 FemModel make_fem_model(const TetMesh& rest_mesh, const Material& material, ModelKind kind) {
