@@ -187,6 +187,28 @@ TEST(FileIo, ReadRefusesWhatIsNotARegularFile) {
   EXPECT_NE(r.error().message.find("directory"), std::string::npos) << r.error().to_string();
 }
 
+// A file made by `truncate -s 10G` is refused at once from its holes, not read as 10 GiB of zeros;
+// one larger than the limit is refused from its size. Neither takes time or memory.
+TEST(FileIo, ReadRefusesSparseAndOversizedFiles) {
+  test::TempDir dir;
+  const std::string path = dir.file("huge.msh");
+  { std::ofstream(path) << "$MeshFormat\n"; }
+  std::filesystem::resize_file(path, 10ULL << 30);
+  auto r = read_file(path);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("is a sparse file"), std::string::npos) << r.error().to_string();
+  EXPECT_EQ(r.error().file, path);
+  r = read_file(path, 1ULL << 20);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("larger than the limit of 1048576"), std::string::npos) << r.error().to_string();
+  // A file with a hole shorter than the check's threshold is read as it is.
+  std::filesystem::resize_file(path, 4096);
+  r = read_file(path);
+  ASSERT_TRUE(r.ok()) << r.error().to_string();
+  EXPECT_EQ(r->size(), 4096U);
+  EXPECT_EQ(r->substr(0, 12), "$MeshFormat\n");
+}
+
 TEST(FileIo, AtomicWriteOfAVeryLongName) {
   test::TempDir dir;
   const std::string path = dir.file(std::string(250, 'a') + ".csv");  // 254 bytes: the temporary must be shorter

@@ -33,6 +33,10 @@ Error line_error(std::string file, std::int64_t line, std::string message);     
 Error offset_error(std::string file, std::int64_t offset, std::string message);  ///< with file and byte offset
 Error field_error(std::string field, std::string message);                       ///< with the field (JSON path)
 
+/// A number for a message in printf's %g with `digits` significant digits, so 0.02 reads "0.02",
+/// not the "0.020000" of std::to_string.
+[[nodiscard]] std::string format_number(double v, int digits = 6);
+
 /// Either a T or an Error. Check with ok() / operator bool before value().
 template <class T>
 class [[nodiscard]] Result {

@@ -57,7 +57,8 @@ struct ReferenceVolume {
 };
 
 /// The volume to compare the mesh's with: the shape's analytic volume, else the structured
-/// mesher's exact one, else (when `extrapolate` and the mesh has at most `max_tets` tets) a
+/// mesher's exact one, else (when `extrapolate`, the mesh has at most `max_tets` tets and the finer
+/// lattice is not wasted on a shape far thinner than its bounds) a
 /// Richardson extrapolation from a stuffed mesh at h/2 (volume error ~ h^2, observed in
 /// tests/meshing): V ~ V(h/2) + (V(h/2) - V(h)) / 3. `mesh_volume`: the mesh's volume, m^3.
 std::optional<ReferenceVolume> reference_volume(const Sdf& sdf, const MeshShapeDef& def, const MeshShapeResult& result,

@@ -31,6 +31,10 @@ inline constexpr double kStuffingMinDihedralDeg = 9.3;    ///< smallest dihedral
 inline constexpr double kStuffingMaxDihedralDeg = 161.7;  ///< largest dihedral angle, degrees
 
 /// Settings of isosurface stuffing.
+/// Memory the stuffer holds per lattice vertex, bytes: the distance (8), eleven cut parameters
+/// (88), the warped flag (1), the position (24) and twelve key numbers (48).
+inline constexpr std::int64_t kStuffingBytesPerLatticeVertex = 169;
+
 struct StuffingDef {
   /// Lattice spacing h (the long BCC edge), m. If 0, chosen to get about `target_tets`.
   double edge_length = 0.0;
@@ -54,8 +58,10 @@ struct StuffingDef {
   double changed_max_dihedral_deg = 150.0;  ///< upper end, degrees
   /// False-position iterations for each cut point (distance functions converge in a few).
   int root_iterations = 16;
-  /// Refuse lattices larger than this (memory guard).
-  std::int64_t max_lattice_vertices = 60'000'000;
+  /// Refuse lattices larger than this (memory guard): the lattice takes about
+  /// kStuffingBytesPerLatticeVertex bytes per vertex, so the default is about 2 GiB. A shape far
+  /// thinner than its bounding box (a corrupted surface with one far vertex) is what reaches it.
+  std::int64_t max_lattice_vertices = 12'000'000;
 };
 
 /// What stuffing did.

@@ -1,5 +1,7 @@
 #include "shatter/core/error.h"
 
+#include <cstdio>
+
 namespace shatter {
 
 std::string Error::to_string() const {
@@ -29,6 +31,12 @@ Error offset_error(std::string file, std::int64_t offset, std::string message) {
 }
 Error field_error(std::string field, std::string message) {
   return Error{.message = std::move(message), .field = std::move(field)};
+}
+
+std::string format_number(double v, int digits) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+  return buf;
 }
 
 }  // namespace shatter

@@ -9,6 +9,8 @@
 #include <fstream>
 #include <system_error>
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace shatter {
@@ -25,6 +27,45 @@ fs::path sibling_name(const fs::path& target, const char* kind) {
   static std::atomic<std::uint64_t> counter{0};
   return target.parent_path() /
          (".shatter-" + std::string(kind) + "-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+}
+
+// Closes a POSIX file descriptor when it leaves scope.
+struct FileDescriptor {
+  int fd;
+  explicit FileDescriptor(int descriptor) : fd(descriptor) {}
+  FileDescriptor(const FileDescriptor&) = delete;
+  FileDescriptor& operator=(const FileDescriptor&) = delete;
+  ~FileDescriptor() { ::close(fd); }
+};
+
+// Files of at least this size are checked for holes; a file storing under 1/kSparseRatio of its
+// bytes is refused (a 10 GiB file made by `truncate` would otherwise be read as 10 GiB of zeros).
+constexpr std::uint64_t kSparseCheckBytes = 1ULL << 20;
+constexpr std::uint64_t kSparseRatio = 16;
+
+std::uint64_t physical_memory_bytes() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES);
+  const long page = ::sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page <= 0) return 0;  // unknown: no memory bound
+  return static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page);
+}
+
+// Bytes of the file's data extents, from lseek's SEEK_DATA / SEEK_HOLE; `size` where the file
+// system cannot say (every byte then counts as stored) or the file has very many extents.
+std::uint64_t stored_bytes(int fd, std::uint64_t size) {
+  constexpr int kMaxExtents = 1 << 16;
+  std::uint64_t stored = 0;
+  ::off_t pos = 0;
+  for (int extent = 0; extent < kMaxExtents; ++extent) {
+    const ::off_t data = ::lseek(fd, pos, SEEK_DATA);
+    if (data < 0) return errno == ENXIO ? stored : size;  // ENXIO: no data after pos
+    const ::off_t hole = ::lseek(fd, data, SEEK_HOLE);
+    if (hole < data) return size;
+    stored += static_cast<std::uint64_t>(hole - data);
+    if (static_cast<std::uint64_t>(hole) >= size) return stored;
+    pos = hole;
+  }
+  return size;
 }
 
 }  // namespace
@@ -130,17 +171,37 @@ Result<std::string> read_file(const std::string& path, std::uint64_t max_bytes) 
                                  : fs::is_socket(st)         ? "a socket"
                                                              : "an unknown kind of file") +
                                 "), expected a file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return file_error(path, std::string("cannot open for reading: ") + std::strerror(errno));
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg();
-  if (size < 0) return file_error(path, "cannot determine the file size");
-  if (static_cast<std::uint64_t>(size) > max_bytes)
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return file_error(path, std::string("cannot open for reading: ") + std::strerror(errno));
+  const FileDescriptor guard{fd};
+  struct stat info{};
+  if (::fstat(fd, &info) != 0 || !S_ISREG(info.st_mode))
+    return file_error(path, "is not a regular file, expected a file");
+  const auto size = static_cast<std::uint64_t>(info.st_size);
+  if (size > max_bytes)
     return file_error(
         path, "file is " + std::to_string(size) + " bytes, larger than the limit of " + std::to_string(max_bytes));
-  in.seekg(0, std::ios::beg);
+  // The file is read whole and parsed into structures of a similar size: refuse one that cannot fit
+  // rather than let the system kill the process half-way.
+  if (const std::uint64_t memory = physical_memory_bytes(); memory > 0 && size > memory / 2)
+    return file_error(path, "file is " + std::to_string(size) + " bytes, more than half of this machine's memory (" +
+                                std::to_string(memory) + " bytes): it is read whole");
+  if (size >= kSparseCheckBytes) {
+    const std::uint64_t stored = stored_bytes(fd, size);
+    if (stored < size / kSparseRatio)
+      return file_error(path, "is a sparse file: only " + std::to_string(stored) + " of its " + std::to_string(size) +
+                                  " bytes are stored, the rest are holes (zeros); no mesh, surface or JSON file "
+                                  "is mostly zeros");
+  }
   std::string data(static_cast<std::size_t>(size), '\0');
-  if (size > 0 && !in.read(data.data(), size)) return file_error(path, "read failed");
+  std::size_t done = 0;  // pread: the hole check above moved the file offset
+  while (done < data.size()) {
+    const ::ssize_t got = ::pread(fd, data.data() + done, data.size() - done, static_cast<::off_t>(done));
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) return file_error(path, std::string("read failed: ") + std::strerror(errno));
+    if (got == 0) return file_error(path, "read failed: the file became shorter while it was read");
+    done += static_cast<std::size_t>(got);
+  }
   return data;
 }
 

@@ -3,7 +3,6 @@
 
 #include <array>
 #include <cmath>
-#include <cstdio>
 
 namespace shatter {
 namespace {
@@ -47,12 +46,6 @@ constexpr std::array<Alias, 9> kAliases = {{
     {"aluminium_6061_t6", "aluminium"},
 }};
 
-std::string fmt(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%g", v);
-  return buf;
-}
-
 }  // namespace
 
 Lame lame_parameters(const Material& m) {
@@ -64,21 +57,23 @@ Lame lame_parameters(const Material& m) {
 Result<void> validate_material(const Material& m) {
   const std::string who = m.name.empty() ? std::string("material") : "material '" + m.name + "'";
   if (!(m.youngs_modulus > 0) || !std::isfinite(m.youngs_modulus))
-    return field_error("youngs_modulus",
-                       who + ": Young's modulus must be a finite number > 0 Pa, got " + fmt(m.youngs_modulus));
+    return field_error("youngs_modulus", who + ": Young's modulus must be a finite number > 0 Pa, got " +
+                                             format_number(m.youngs_modulus));
   if (!(m.poisson_ratio > -1.0 && m.poisson_ratio < 0.5))
-    return field_error("poisson_ratio", who + ": Poisson ratio must lie in (-1, 0.5), got " + fmt(m.poisson_ratio));
+    return field_error("poisson_ratio",
+                       who + ": Poisson ratio must lie in (-1, 0.5), got " + format_number(m.poisson_ratio));
   if (!(m.density > 0) || !std::isfinite(m.density))
-    return field_error("density", who + ": density must be a finite number > 0 kg/m^3, got " + fmt(m.density));
+    return field_error("density",
+                       who + ": density must be a finite number > 0 kg/m^3, got " + format_number(m.density));
   if (!(m.tensile_strength > 0))
-    return field_error("tensile_strength",
-                       who + ": tensile strength must be > 0 Pa (inf: never cracks), got " + fmt(m.tensile_strength));
+    return field_error("tensile_strength", who + ": tensile strength must be > 0 Pa (inf: never cracks), got " +
+                                               format_number(m.tensile_strength));
   if (!(m.yield_stress > 0))
-    return field_error("yield_stress",
-                       who + ": yield stress must be > 0 Pa (inf: perfectly elastic), got " + fmt(m.yield_stress));
+    return field_error("yield_stress", who + ": yield stress must be > 0 Pa (inf: perfectly elastic), got " +
+                                           format_number(m.yield_stress));
   if (!(m.fracture_toughness > 0))
     return field_error("fracture_toughness", who + ": fracture toughness must be > 0 Pa*sqrt(m) (inf: not used), got " +
-                                                 fmt(m.fracture_toughness));
+                                                 format_number(m.fracture_toughness));
   return {};
 }
 

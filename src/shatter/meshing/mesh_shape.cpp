@@ -1,6 +1,9 @@
 // Mesher choice and reference volume (see mesh_shape.h).
 #include "shatter/meshing/mesh_shape.h"
 
+#include <algorithm>
+#include <cstdint>
+
 #include "shatter/mesh/quality.h"
 
 namespace shatter {
@@ -71,11 +74,24 @@ Result<MeshShapeResult> mesh_shape(const Sdf& sdf, const MeshShapeDef& def, cons
   return out;
 }
 
+namespace {
+// The extrapolated reference is skipped when its lattice would exceed both this many points and
+// this many per tet of the mesh (a filled shape has about 3 to 16 per tet at h/2).
+constexpr std::int64_t kReferenceLatticeFloor = 2'000'000;
+constexpr std::int64_t kReferenceLatticePerTet = 100;
+}  // namespace
+
 std::optional<ReferenceVolume> reference_volume(const Sdf& sdf, const MeshShapeDef& def, const MeshShapeResult& result,
                                                 double mesh_volume, bool extrapolate, Index max_tets) {
   if (const std::optional<double> v = sdf.analytic_volume()) return ReferenceVolume{*v, "analytic"};
   if (result.exact_volume) return ReferenceVolume{*result.exact_volume, "exact"};
   if (!extrapolate || result.mesh.num_tets() > max_tets) return std::nullopt;
+  // The lattice at h/2 has eight times the points. Where the mesh fills little of its lattice (a
+  // shape far thinner than its bounds, such as a surface with one stray vertex) that costs far
+  // more than the mesh did: skip it rather than spend seconds and gigabytes on a report.
+  const std::int64_t fine_lattice = 8 * result.stuffing.lattice_vertices;
+  if (fine_lattice > std::max<std::int64_t>(kReferenceLatticeFloor, kReferenceLatticePerTet * result.mesh.num_tets()))
+    return std::nullopt;
   // Stuffing at h/2 (grading does not change the volume, so the finer mesh is left uniform).
   auto fine = stuff_tets(sdf, {.edge_length = 0.5 * result.edge_length, .sharpen = def.stuffing.sharpen});
   if (!fine) return std::nullopt;

@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -81,9 +80,7 @@ SweepSize sweep_size(const std::vector<Vec2>& poly, double h, const RevolveDef& 
 // A count for messages: whole numbers as such, astronomically large ones in %g.
 std::string count_text(double v) {
   if (v < 1e15) return std::to_string(std::llround(v));
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g", v);
-  return buf;
+  return format_number(v, 3);
 }
 
 // An error when a sweep of that size is beyond the limits of `def`, naming the limit.
@@ -92,9 +89,7 @@ Result<void> check_sweep_size(const std::vector<Vec2>& profile, const SweepSize&
     return field_error("profile", "the profile has " + std::to_string(profile.size()) + " points (limit " +
                                       std::to_string(def.max_profile_points) + "): expected a simpler profile");
   auto fail = [&](const std::string& what) {
-    char hb[32];
-    std::snprintf(hb, sizeof hb, "%.6g", h);
-    return field_error("edge_length", std::string("edge length ") + hb + " m gives " + what +
+    return field_error("edge_length", "edge length " + format_number(h) + " m gives " + what +
                                           ": expected a larger edge length or fewer segments");
   };
   if (!(z.points <= static_cast<double>(def.max_profile_points)))

@@ -305,11 +305,15 @@ Result<TetMesh> stuff_once(const Sdf& sdf, const StuffingDef& def, double h, Stu
     if (!(cells < 1e6)) count = std::numeric_limits<double>::infinity();
     lat.n[a] = static_cast<int>(std::min(cells, 1e6));
   }
-  if (!(2 * count <= static_cast<double>(def.max_lattice_vertices)))
-    return field_error("edge_length", "edge length " + std::to_string(h) + " m needs a lattice of about " +
-                                          std::to_string(2 * count) + " points (limit " +
-                                          std::to_string(def.max_lattice_vertices) +
-                                          "): expected a larger edge length");
+  if (!(2 * count <= static_cast<double>(def.max_lattice_vertices))) {
+    const double gib = 2 * count * static_cast<double>(kStuffingBytesPerLatticeVertex) / (1024.0 * 1024 * 1024);
+    return field_error("edge_length", "edge length " + format_number(h) + " m needs a lattice of " +
+                                          format_number(2 * count) + " points (about " + format_number(gib) +
+                                          " GiB; limit " + std::to_string(def.max_lattice_vertices) +
+                                          " points) for bounds of " + format_number(ext.x()) + " x " +
+                                          format_number(ext.y()) + " x " + format_number(ext.z()) +
+                                          " m: expected a larger edge length");
+  }
   lat.origin = 0.5 * (box.min + box.max) - 0.5 * h * lat.n.cast<double>();
   lat.nb = std::int64_t(lat.n.x() + 1) * (lat.n.y() + 1) * (lat.n.z() + 1);
   lat.nr = std::int64_t(lat.n.x()) * lat.n.y() * lat.n.z();

@@ -41,12 +41,6 @@ constexpr std::int64_t kMinParallelEnergyTets = 8192;  // ~0.05 us per tet
 // decrease that the slope predicts.
 constexpr double kArmijo = 1e-4;
 
-std::string format_number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g", v);
-  return buf;
-}
-
 // Sizes of the inputs against the model: errors, not reports (the caller passed wrong arrays).
 Result<void> check_sizes(const FemModel& model, const StaticProblem& problem, const std::vector<Vec3>& x) {
   const Index n = model.num_nodes;
@@ -261,7 +255,7 @@ Result<StaticReport> StaticSolver::solve(const FemModel& model, const StaticProb
   // Residual at the returned x against the full load.
   st.report.relative_residual = residual(st, 1.0) / st.reference;
   record_final(st);
-  return st.finish({failure.status, "load step failed at load fraction " + format_number(done) + " after " +
+  return st.finish({failure.status, "load step failed at load fraction " + format_number(done, 3) + " after " +
                                         std::to_string(halvings) + " halvings: " + failure.message});
 }
 
@@ -377,15 +371,15 @@ StaticSolver::Outcome StaticSolver::newton_load_step(SolveState& st, double s, d
       // size (a body at rest) and a relative residual near 1 is the right answer.
       if (rel <= options_.max_round_off_residual || !st.load_reference) return {};
       return {SolveStatus::no_convergence,
-              "the residual stalls at its round-off level, relative residual " + format_number(rel) + " (above " +
-                  format_number(options_.max_round_off_residual) +
+              "the residual stalls at its round-off level, relative residual " + format_number(rel, 3) + " (above " +
+                  format_number(options_.max_round_off_residual, 3) +
                   "): the displacements are below what double precision resolves at this mesh's coordinates "
                   "and size (check the units; a mesh far from the origin is solved about its centre by "
                   "shatter static)"};
     }
     if (it == options_.max_newton_iterations)
       return {SolveStatus::no_convergence, "no convergence in " + std::to_string(it) +
-                                               " Newton iterations (relative residual " + format_number(rel) + ")"};
+                                               " Newton iterations (relative residual " + format_number(rel, 3) + ")"};
     previous_rel = rel;
     if (Outcome step = newton_iteration(st, s, it, rel); !step.ok()) return step;
   }
