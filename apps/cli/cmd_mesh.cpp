@@ -45,6 +45,11 @@ Result<TriSurface> load_surface(const std::string& path) {
   return std::move(r->surface);
 }
 
+// The largest tet count and refinement factor the command line takes: the meshers refuse more
+// than 20 million tets anyway, and these keep the product a whole number far from overflow.
+constexpr std::int64_t kMaxTargetTets = 20'000'000;
+constexpr double kMaxRefine = 1000;
+
 Result<Sdf> primitive(const MeshArgs& a) {
   auto need = [](double v, const char* name) -> Result<void> {
     if (!(v > 0) || !std::isfinite(v)) return field_error(name, "expected a length > 0 m");
@@ -112,8 +117,8 @@ int run_mesh(const MeshArgs& a) {
     def.grading = f->grading;
     def.sharpen = f->sharpen;
   } else if (!a.primitive.empty()) {
-    auto s = primitive(a);
-    if (!s) return report_error(s.error().to_string(), kExitBadInput);
+    auto s = primitive(a);  // its sizes come from the command line only: a usage error
+    if (!s) return report_error(s.error().to_string(), kExitUsage);
     sdf = *s;
     name = a.primitive;
   } else {
@@ -125,6 +130,9 @@ int run_mesh(const MeshArgs& a) {
     name = a.surface;
   }
   // Size: the command line overrides the shape file.
+  if (a.edge_length < 0) return report_error("--edge-length: expected a length > 0 m", kExitUsage);
+  if (a.tets < 0 || a.tets > kMaxTargetTets)
+    return report_error("--tets: expected a count from 1 to " + std::to_string(kMaxTargetTets), kExitUsage);
   if (a.edge_length > 0 || a.tets > 0) {
     def.edge_length = a.edge_length;
     def.target_tets = a.edge_length > 0 ? 0 : a.tets;
@@ -137,7 +145,8 @@ int run_mesh(const MeshArgs& a) {
     def.grading = *a.grading;
   }
   if (a.no_sharpen) def.sharpen = false;
-  if (!(a.refine > 0) || !std::isfinite(a.refine)) return report_error("--refine: expected a factor > 0", kExitUsage);
+  if (!(a.refine > 0) || !(a.refine <= kMaxRefine))
+    return report_error("--refine: expected a factor > 0 and at most " + format_number(kMaxRefine), kExitUsage);
   // About `refine` times as many tets: h / cbrt(refine), or the target count times refine.
   def.edge_length /= std::cbrt(a.refine);
   def.target_tets = static_cast<std::int64_t>(std::llround(static_cast<double>(def.target_tets) * a.refine));
@@ -155,6 +164,9 @@ int run_mesh(const MeshArgs& a) {
     // Errors of the meshers (sizes, profiles, methods) come after the file was read: name it.
     Error e = meshed.error();
     if (e.file.empty()) e.file = !a.shape.empty() ? a.shape : a.surface;
+    // A size given on the command line is named as its option.
+    if (e.field == "edge_length" && a.edge_length > 0) e.field = "--edge-length";
+    if (e.field == "edge_length" && a.edge_length <= 0 && a.tets > 0) e.field = "--tets";
     return report_error(e.to_string(), kExitBadInput);
   }
   const TetMesh* mesh = &meshed->mesh;

@@ -1,6 +1,8 @@
 // `shatter`: command-line entry point. Data goes to stdout, messages to stderr.
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <string>
@@ -44,6 +46,21 @@ bool parse_size(const std::string& text, int lo, int hi, int& width, int& height
          width >= lo && height >= lo && width <= hi && height <= hi;
 }
 
+// Every floating-point option of the parsed subcommand holds a finite number: CLI11 reads "nan",
+// "inf" and "1e400" (infinity) as doubles, and no option means any of them. Empty when all are.
+std::string non_finite_option(const CLI::App& sub) {
+  for (const CLI::Option* opt : sub.get_options()) {
+    if (opt->get_type_name().rfind("FLOAT", 0) != 0) continue;
+    for (const std::string& text : opt->results()) {
+      char* end = nullptr;
+      const double v = std::strtod(text.c_str(), &end);
+      if (end != text.c_str() && !std::isfinite(v))
+        return opt->get_name() + ": expected a finite number, got \"" + text + "\"";
+    }
+  }
+  return {};
+}
+
 int report_error(const std::string& message, int code) {
   std::fprintf(stderr, "shatter: error: %s\n", message.c_str());
   return code;
@@ -66,13 +83,23 @@ int main(int argc, char** argv) {
   }
   try {
     app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);
-    return code == 0 ? kExitOk : kExitUsage;
+    // CLI11's own messages ("Could not convert: --radius = abc") in the form of every other error.
+    report_error(std::string(e.what()) + " (shatter COMMAND --help lists the options)", kExitUsage);
+    return kExitUsage;
   }
   try {
-    for (auto& [sub, run] : commands)
-      if (sub->parsed()) return run();
+    for (auto& [sub, run] : commands) {
+      if (!sub->parsed()) continue;
+      if (const std::string bad = non_finite_option(*sub); !bad.empty()) return report_error(bad, kExitUsage);
+      return run();
+    }
   } catch (const std::exception& e) {
     return report_error(std::string("internal error: ") + e.what(), kExitFailure);
   }

@@ -47,6 +47,27 @@ TEST(MeshRoundTrip, EveryVolumeFormat) {
   EXPECT_FALSE(read_mesh(dir.file("missing.ele")).ok());
 }
 
+// Ids from a format that starts at 0 (TetGen, MEDIT) cannot be Gmsh tags or Abaqus numbers: those
+// writers number 1..n with a warning instead of failing after the input was read.
+TEST(MeshRoundTrip, IdsThatAreNotPositiveAreRenumbered) {
+  test::TempDir dir;
+  TetMesh m = sample_mesh();
+  for (Index i = 0; i < m.num_nodes(); ++i) m.node_ids[static_cast<std::size_t>(i)] = i;
+  for (Index e = 0; e < m.num_tets(); ++e) m.tet_ids[static_cast<std::size_t>(e)] = e;
+  for (const char* file : {"z.msh", "z.inp"}) {
+    SCOPED_TRACE(file);
+    test::ExpectWarnings warnings;
+    ASSERT_OK(write_mesh(dir.file(file), m));
+    EXPECT_EQ(warnings.messages().size(), 2U);
+    auto r = read_mesh(dir.file(file));
+    ASSERT_OK(r);
+    EXPECT_EQ(r->mesh.positions, m.positions);
+    EXPECT_EQ(r->mesh.tets, m.tets);
+    for (Index i = 0; i < m.num_nodes(); ++i) EXPECT_EQ(r->mesh.node_id(i), i + 1);
+    for (Index e = 0; e < m.num_tets(); ++e) EXPECT_EQ(r->mesh.tet_id(e), e + 1);
+  }
+}
+
 TEST(MeshRoundTrip, TagsAndSetsWhereHeld) {
   test::TempDir dir;
   TetMesh m = sample_mesh();

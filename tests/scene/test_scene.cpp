@@ -196,6 +196,36 @@ TEST(SceneRun, OutputsReadBackAndSurviveAStop) {
   EXPECT_EQ(r.status, 0) << r.output;
 }
 
+// A run's outputs replace an earlier run's all together at its end: while it runs, the earlier
+// files stay as they were; afterwards the folder holds this run only (the longer run's extra
+// frames are gone) and no temporary.
+TEST(SceneRun, ASecondRunReplacesTheFirstAllTogether) {
+  auto scene = read_scene(scenes_dir() + "/vase_drop.json");
+  ASSERT_OK(scene);
+  test::TempDir dir;
+  const std::filesystem::path frames = dir.path() / "frames";
+  ASSERT_OK(run_scene(*scene, {.out_dir = dir.path().string(), .duration = 0.5}));
+  ASSERT_TRUE(std::filesystem::exists(frames / "frame_000015.vtu"));
+  const auto first_summary_time = std::filesystem::last_write_time(dir.path() / "summary.json");
+  bool earlier_kept = true;
+  RunOptions options{.out_dir = dir.path().string(), .duration = 0.2};
+  options.progress = [&](double, std::int64_t, Index) {
+    earlier_kept = earlier_kept && std::filesystem::exists(frames / "frame_000015.vtu") &&
+                   std::filesystem::last_write_time(dir.path() / "summary.json") == first_summary_time;
+  };
+  auto second = run_scene(*scene, options);
+  ASSERT_OK(second);
+  EXPECT_TRUE(earlier_kept);
+  EXPECT_TRUE(std::filesystem::exists(frames / "frame_000006.vtu"));
+  EXPECT_FALSE(std::filesystem::exists(frames / "frame_000007.vtu"));
+  EXPECT_FALSE(std::filesystem::exists(frames / "frame_000015.vtu"));
+  EXPECT_FALSE(std::filesystem::exists(frames / "surface_000015.ply"));
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir.path()))
+    EXPECT_EQ(e.path().filename().string().find(".shatter-"), std::string::npos) << e.path();
+  std::ifstream summary_file(dir.path() / "summary.json");
+  EXPECT_EQ(nlohmann::json::parse(summary_file).at("steps").get<std::int64_t>(), second->steps);
+}
+
 // Ctrl-C: the run stops after the current step, exits 130 and leaves complete files.
 TEST(SceneRun, CliInterruptLeavesCompleteFiles) {
   test::TempDir dir;

@@ -86,13 +86,14 @@ OutputBatch::~OutputBatch() {
 OutputBatch* OutputBatch::current() { return t_batch; }
 
 void OutputBatch::stage(const std::string& target, const std::string& temp) {
-  for (Staged& s : staged_)
-    if (s.target == target) {
-      std::error_code ec;
-      fs::remove(s.temp, ec);
-      s.temp = temp;
-      return;
-    }
+  // A run that rewrites its series at every frame stages the same target thousands of times.
+  if (const auto it = index_.find(target); it != index_.end()) {
+    std::error_code ec;
+    fs::remove(staged_[it->second].temp, ec);
+    staged_[it->second].temp = temp;
+    return;
+  }
+  index_.emplace(target, staged_.size());
   staged_.push_back({target, temp});
 }
 
@@ -107,6 +108,7 @@ void OutputBatch::discard() {
   std::error_code ec;
   for (const Staged& s : staged_) fs::remove(s.temp, ec);
   staged_.clear();
+  index_.clear();
   remove_.clear();
 }
 
@@ -153,6 +155,7 @@ Result<void> OutputBatch::commit() {
     if (!p.empty()) fs::remove(p, ec);
   for (const std::string& p : remove_) fs::remove(p, ec);
   staged_.clear();
+  index_.clear();
   remove_.clear();
   return {};
 }

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <functional>
 #include <iosfwd>
+#include <map>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -56,6 +57,7 @@ class OutputBatch {
   void discard();
   OutputBatch* outer_ = nullptr;  ///< the batch this one joined, or nullptr for the outermost
   std::vector<Staged> staged_;
+  std::map<std::string, std::size_t> index_;  ///< target -> its entry in staged_
   std::vector<std::string> remove_;
 };
 

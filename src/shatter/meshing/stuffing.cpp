@@ -307,12 +307,14 @@ Result<TetMesh> stuff_once(const Sdf& sdf, const StuffingDef& def, double h, Stu
   }
   if (!(2 * count <= static_cast<double>(def.max_lattice_vertices))) {
     const double gib = 2 * count * static_cast<double>(kStuffingBytesPerLatticeVertex) / (1024.0 * 1024 * 1024);
-    return field_error("edge_length", "edge length " + format_number(h) + " m needs a lattice of " +
-                                          format_number(2 * count) + " points (about " + format_number(gib) +
-                                          " GiB; limit " + std::to_string(def.max_lattice_vertices) +
-                                          " points) for bounds of " + format_number(ext.x()) + " x " +
-                                          format_number(ext.y()) + " x " + format_number(ext.z()) +
-                                          " m: expected a larger edge length");
+    const bool huge = !(gib < 1e12);  // also an infinite count, which a message never prints
+    return field_error("edge_length",
+                       "edge length " + format_number(h) + " m needs a lattice of " +
+                           (huge ? std::string("more than 1e20") : format_number(2 * count)) + " points (" +
+                           (huge ? std::string("far beyond any memory") : "about " + format_number(gib) + " GiB") +
+                           "; limit " + std::to_string(def.max_lattice_vertices) + " points) for bounds of " +
+                           format_number(ext.x()) + " x " + format_number(ext.y()) + " x " + format_number(ext.z()) +
+                           " m: expected a larger edge length");
   }
   lat.origin = 0.5 * (box.min + box.max) - 0.5 * h * lat.n.cast<double>();
   lat.nb = std::int64_t(lat.n.x() + 1) * (lat.n.y() + 1) * (lat.n.z() + 1);

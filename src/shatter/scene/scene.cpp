@@ -13,6 +13,7 @@
 #include <limits>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <utility>
 
 #include "shatter/core/file_io.h"
@@ -726,6 +727,26 @@ Result<void> apply_due_actions(const Scene& scene, SceneWorld& built, std::size_
   return {};
 }
 
+namespace {
+
+// Frames of an earlier, longer run in `out`/frames (frame_<k>.vtu, surface_<k>.*, k >= `count`)
+// are removed when `batch` commits, so the folder holds one run.
+void remove_stale_frames(OutputBatch& batch, const std::string& out, std::size_t count) {
+  std::error_code ec;
+  const std::filesystem::path dir = std::filesystem::path(out) / "frames";
+  for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    std::size_t k = 0;
+    char rest[16] = {};
+    if ((std::sscanf(name.c_str(), "frame_%zu.%15s", &k, rest) == 2 ||
+         std::sscanf(name.c_str(), "surface_%zu.%15s", &k, rest) == 2) &&
+        k >= count)
+      batch.remove_on_commit(it->path().string());
+  }
+}
+
+}  // namespace
+
 Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
   const auto t_start = Clock::now();
   SHATTER_TRY(built, build_scene(scene));
@@ -742,10 +763,16 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
   std::vector<std::string> event_lines;
   std::size_t frame_count = 0;
   double last_frame_time = -1;  // s
+  // The run's outputs are replaced all together or not at all: every file goes to a temporary
+  // beside its target (the series and event log are rewritten at every frame, each time a new
+  // temporary), and all are renamed into place when the run ends, also when it is stopped. A
+  // run that fails, or a process that is killed, leaves every earlier file as it was.
+  std::optional<OutputBatch> batch;
   if (write) {
     std::error_code ec;
     std::filesystem::create_directories(std::filesystem::path(options.out_dir) / (vtu ? "frames" : ""), ec);
     if (ec) return make_error(options.out_dir + ": cannot create the output folder: " + ec.message());
+    batch.emplace();
   }
   // Names of bodies for the summary: the scene's, and "<parent>.<k>" for fragments.
   std::map<Index, std::string> names;
@@ -873,6 +900,8 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
       SHATTER_TRY(ok, write_file_atomic(out + "/summary.json", summary.dump(2) + "\n"));
       s.files.push_back(out + "/summary.json");
     }
+    remove_stale_frames(*batch, out, frame_count);
+    SHATTER_TRY(committed, batch->commit());
   }
   s.wall_ms = ms_since(t_start);
   return s;

@@ -6,6 +6,7 @@
 #include <string>
 #include <unordered_set>
 
+#include "shatter/core/log.h"
 #include "shatter/mesh/io/io_util.h"
 #include "shatter/mesh/io/mesh_io.h"
 #include "shatter/mesh/io/mesh_io_util.h"
@@ -424,11 +425,20 @@ Result<void> write_inp(std::ostream& out, const TetMesh& mesh) {
     for (const auto& [name, v] : *sets) {
       SHATTER_TRY(ok, check_set_name(name));
     }
+  // Abaqus and CalculiX numbers are > 0. Ids that are not all positive (TetGen's and MEDIT's may
+  // start at 0) cannot be kept: the nodes or elements are then numbered 1..n, with a warning.
+  bool node_ids_kept = true, tet_ids_kept = true;
+  for (Index i = 0; i < mesh.num_nodes() && node_ids_kept; ++i) node_ids_kept = mesh.node_id(i) > 0;
+  for (Index e = 0; e < mesh.num_tets() && tet_ids_kept; ++e) tet_ids_kept = mesh.tet_id(e) > 0;
+  if (!node_ids_kept) log_warning("write_inp: node ids are not all positive; node numbers written as 1..n");
+  if (!tet_ids_kept) log_warning("write_inp: tet ids are not all positive; element numbers written as 1..n");
+  auto node_number = [&](Index i) { return node_ids_kept ? mesh.node_id(i) : FileId{i} + 1; };
+  auto tet_number = [&](Index e) { return tet_ids_kept ? mesh.tet_id(e) : FileId{e} + 1; };
   io::WriteBuffer buffer(out);
   std::string& s = buffer.text();
   s = "*NODE\n";
   for (Index i = 0; i < mesh.num_nodes(); ++i) {
-    io::append_int(s, mesh.node_id(i));
+    io::append_int(s, node_number(i));
     for (int k = 0; k < 3; ++k) {
       s += ", ";
       io::append_double(s, mesh.positions[i][k]);
@@ -438,21 +448,21 @@ Result<void> write_inp(std::ostream& out, const TetMesh& mesh) {
   }
   s += "*ELEMENT, TYPE=C3D4\n";
   for (Index e = 0; e < mesh.num_tets(); ++e) {
-    io::append_int(s, mesh.tet_id(e));
+    io::append_int(s, tet_number(e));
     for (int k = 0; k < 4; ++k) {
       s += ", ";
-      io::append_int(s, mesh.node_id(mesh.tets[e][k]));
+      io::append_int(s, node_number(mesh.tets[e][k]));
     }
     s += '\n';
     buffer.maybe_flush();
   }
   for (const auto& [name, set] : mesh.node_sets) {
     s += "*NSET, NSET=" + set_name_text(name) + "\n";
-    write_id_list(s, set, [&](Index i) { return mesh.node_id(i); });
+    write_id_list(s, set, [&](Index i) { return node_number(i); });
   }
   for (const auto& [name, set] : mesh.tet_sets) {
     s += "*ELSET, ELSET=" + set_name_text(name) + "\n";
-    write_id_list(s, set, [&](Index e) { return mesh.tet_id(e); });
+    write_id_list(s, set, [&](Index e) { return tet_number(e); });
   }
   buffer.flush();
   return {};

@@ -10,6 +10,7 @@
 #include <ostream>
 #include <set>
 
+#include "shatter/core/log.h"
 #include "shatter/mesh/io/mesh_io.h"
 #include "shatter/mesh/io/mesh_io_util.h"
 #include "shatter/mesh/io/text_cursor.h"
@@ -732,26 +733,31 @@ Result<void> write_msh(std::ostream& out, const TetMesh& mesh, const MeshWriteOp
   if (tagged && mesh.tet_tags.size() != static_cast<std::size_t>(ne))
     return make_error("write_msh: tet_tags has " + std::to_string(mesh.tet_tags.size()) + " entries for " +
                       std::to_string(ne) + " tets");
+  // Gmsh tags are > 0. Ids that are not all positive (TetGen's and MEDIT's may start at 0) cannot
+  // be kept: the nodes or tets are then tagged 1..n, and a warning says so.
+  bool node_ids_kept = true, tet_ids_kept = true;
+  for (Index i = 0; i < nn && node_ids_kept; ++i) node_ids_kept = mesh.node_id(i) > 0;
+  for (Index e = 0; e < ne && tet_ids_kept; ++e) tet_ids_kept = mesh.tet_id(e) > 0;
+  if (!node_ids_kept) log_warning("write_msh: node ids are not all positive; Gmsh node tags written as 1..n");
+  if (!tet_ids_kept) log_warning("write_msh: tet ids are not all positive; Gmsh element tags written as 1..n");
+  auto node_tag = [&](Index i) { return node_ids_kept ? mesh.node_id(i) : FileId{i} + 1; };
+  auto tet_tag = [&](Index e) { return tet_ids_kept ? mesh.tet_id(e) : FileId{e} + 1; };
   FileId min_node = std::numeric_limits<FileId>::max(), max_node = 0, min_tet = std::numeric_limits<FileId>::max(),
          max_tet = 0;
   for (Index i = 0; i < nn; ++i) {
-    const FileId id = mesh.node_id(i);
-    if (id <= 0) return make_error("write_msh: node id " + std::to_string(id) + " is not positive (Gmsh tags are > 0)");
-    min_node = std::min(min_node, id);
-    max_node = std::max(max_node, id);
+    min_node = std::min(min_node, node_tag(i));
+    max_node = std::max(max_node, node_tag(i));
   }
   for (Index e = 0; e < ne; ++e) {
-    const FileId id = mesh.tet_id(e);
-    if (id <= 0) return make_error("write_msh: tet id " + std::to_string(id) + " is not positive (Gmsh tags are > 0)");
-    min_tet = std::min(min_tet, id);
-    max_tet = std::max(max_tet, id);
+    min_tet = std::min(min_tet, tet_tag(e));
+    max_tet = std::max(max_tet, tet_tag(e));
   }
   if (nn == 0) min_node = 0;
   if (ne == 0) min_tet = 0;
   for (Index e = 0; e < ne; ++e)
     for (Index v : mesh.tets[e])
       if (v < 0 || v >= nn)
-        return make_error("write_msh: tet " + std::to_string(mesh.tet_id(e)) + " has node index " + std::to_string(v) +
+        return make_error("write_msh: tet " + std::to_string(tet_tag(e)) + " has node index " + std::to_string(v) +
                           " out of range");
 
   io::WriteBuffer w(out);
@@ -853,7 +859,7 @@ Result<void> write_msh(std::ostream& out, const TetMesh& mesh, const MeshWriteOp
       int_val(node_entity);
       int_val(0);
       size_t_val(static_cast<std::uint64_t>(nn));
-      for (Index i = 0; i < nn; ++i) size_t_val(static_cast<std::uint64_t>(mesh.node_id(i)));
+      for (Index i = 0; i < nn; ++i) size_t_val(static_cast<std::uint64_t>(node_tag(i)));
       for (const Vec3& p : mesh.positions)
         for (int k = 0; k < 3; ++k) w.raw(p[k], false);
     }
@@ -874,7 +880,7 @@ Result<void> write_msh(std::ostream& out, const TetMesh& mesh, const MeshWriteOp
       w.integer(nn);
       w << '\n';
       for (Index i = 0; i < nn; ++i) {
-        w.integer(mesh.node_id(i));
+        w.integer(node_tag(i));
         w << '\n';
       }
       for (const Vec3& p : mesh.positions) {
@@ -922,8 +928,8 @@ Result<void> write_msh(std::ostream& out, const TetMesh& mesh, const MeshWriteOp
       int_val(4);
       size_t_val(static_cast<std::uint64_t>(e_end - b));
       for (Index e = b; e < e_end; ++e) {
-        size_t_val(static_cast<std::uint64_t>(mesh.tet_id(e)));
-        for (Index v : mesh.tets[e]) size_t_val(static_cast<std::uint64_t>(mesh.node_id(v)));
+        size_t_val(static_cast<std::uint64_t>(tet_tag(e)));
+        for (Index v : mesh.tets[e]) size_t_val(static_cast<std::uint64_t>(node_tag(v)));
       }
     } else {
       w << "3 ";
@@ -932,10 +938,10 @@ Result<void> write_msh(std::ostream& out, const TetMesh& mesh, const MeshWriteOp
       w.integer(e_end - b);
       w << '\n';
       for (Index e = b; e < e_end; ++e) {
-        w.integer(mesh.tet_id(e));
+        w.integer(tet_tag(e));
         for (Index v : mesh.tets[e]) {
           w << ' ';
-          w.integer(mesh.node_id(v));
+          w.integer(node_tag(v));
         }
         w << '\n';
       }
