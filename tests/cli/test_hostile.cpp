@@ -16,8 +16,10 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -68,14 +70,14 @@ std::map<std::string, std::string> snapshot(const fs::path& dir) {
 }
 
 // What a run printed: stdout (data, reports) and stderr (messages) apart.
-struct Run {
+struct RunResult {
   int status = -1;
   std::string out, err;
 };
 
 // A run of the CLI under limits: `timeout` kills a hang (status 137), `ulimit -v` turns unbounded
 // memory into a failed allocation.
-Run run_limited(const std::string& args, int seconds = 60) {
+RunResult run_limited(const std::string& args, int seconds = 60) {
   static int counter = 0;
   const fs::path err = fs::temp_directory_path() /
                        ("shatter_hostile_stderr_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
@@ -84,7 +86,7 @@ Run run_limited(const std::string& args, int seconds = 60) {
   cmd +=
       "timeout -s KILL " + std::to_string(seconds) + " " + test::cli_path() + " " + args + " 2>" + quoted(err.string());
   const test::CommandResult r = test::run_command(cmd);
-  Run run{r.status, r.output, read_all(err)};
+  RunResult run{r.status, r.output, read_all(err)};
   fs::remove(err);
   return run;
 }
@@ -114,10 +116,10 @@ struct Expect {
 };
 
 // Run `args` and check every promise; `what` says in a failure message what the input was.
-Run check_run(const std::string& args, const Expect& e, const std::string& what, int seconds = 60) {
+RunResult check_run(const std::string& args, const Expect& e, const std::string& what, int seconds = 60) {
   std::vector<std::map<std::string, std::string>> before;
   for (const fs::path& d : e.outputs) before.push_back(snapshot(d));
-  const Run r = run_limited(args, seconds);
+  const RunResult r = run_limited(args, seconds);
   const std::string head =
       what + "\n$ shatter " + args + "\nstderr: " + r.err.substr(0, 1000) + "\nstdout: " + r.out.substr(0, 500);
   EXPECT_NE(r.status, 137) << "did not finish in " << seconds << " s: " << head;
@@ -415,6 +417,54 @@ TEST(HostileInput, InputsThatAreNotReadableFiles) {
     const std::string in = dir.file(name);
     check_run("mesh -n 300 --surface " + quoted(in) + " -o " + o + "/m.vtu", {{3}, in, false, {out}}, in, 20);
   }
+}
+
+// A 10 GiB file made by `truncate` is refused at once, not read (it would take 10 GiB and a minute).
+TEST(HostileInput, SparseHugeFile) {
+  SHATTER_REQUIRE_TOOL(have_cli(), "shatter executable not built");
+  test::TempDir dir;
+  const fs::path huge = dir.path() / "huge.msh";
+  write_all(huge, "$MeshFormat\n");
+  fs::resize_file(huge, 10ULL << 30);
+  for (const std::string& args : {"inspect " + quoted(huge.string()),
+                                  "convert " + quoted(huge.string()) + " " + quoted(dir.file("out.vtu"))}) {
+    const RunResult r = check_run(args, {{3}, huge.string(), false, {}}, "a sparse 10 GiB file", 20);
+    EXPECT_NE(r.err.find("is a sparse file"), std::string::npos) << r.err;
+  }
+}
+
+// A binary STL with one vertex thrown far away (one corrupted coordinate): the shape is a long thin
+// spike in a huge box. Meshing it finely is refused at once with the memory it would take; coarser,
+// it is meshed without the reference volume, whose lattice would be eight times as wasteful.
+TEST(HostileInput, SurfaceWithAStrayVertex) {
+  SHATTER_REQUIRE_TOOL(have_cli(), "shatter executable not built");
+  test::TempDir dir;
+  const std::string cli = test::cli_path();
+  ASSERT_EQ(test::run_command(cli + " mesh --primitive sphere --radius 0.1 -n 2000 -o " + quoted(dir.file("s.vtu")) +
+                              " && " + cli + " convert -q --binary " + quoted(dir.file("s.vtu")) + " " +
+                              quoted(dir.file("s.stl")))
+                .status,
+            0);
+  const std::string stl = read_all(dir.path() / "s.stl");
+  ASSERT_GT(stl.size(), 84U + 50 * 6);
+  auto stray = [&](float x, const std::string& name) {
+    std::string bytes = stl;
+    std::memcpy(bytes.data() + 84 + 50 * 5 + 12, &x, sizeof x);  // triangle 5, vertex 0, x
+    write_all(dir.path() / name, bytes);
+    return quoted(dir.file(name));
+  };
+  const auto start = std::chrono::steady_clock::now();
+  const RunResult fine = check_run("mesh --surface " + stray(300.0F, "far.stl") + " -H 0.01 -o " + quoted(dir.file("m.vtu")),
+                             {{3}, "far.stl", false, {}}, "a stray vertex 300 m away", 30);
+  EXPECT_NE(fine.err.find("GiB"), std::string::npos) << fine.err;
+  EXPECT_NE(fine.err.find("300.1 x 0.2"), std::string::npos) << fine.err;  // the bounds, so the user sees why
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
+  const RunResult coarse =
+      check_run("mesh --json --surface " + stray(100.0F, "near.stl") + " -H 0.02 -o " + quoted(dir.file("m.vtu")),
+                {{0}, "", true, {}}, "a stray vertex 100 m away", 60);
+  const auto j = nlohmann::json::parse(coarse.out);
+  EXPECT_FALSE(j.contains("reference_volume")) << coarse.out;
+  EXPECT_GT(j["tets"].get<int>(), 1000);
 }
 
 // Numbers on the command line that are not numbers, not finite or far out of range: a usage error
