@@ -96,15 +96,6 @@ TEST(MshRead, BinaryTagAboveInt64IsRefused) {
   }
 }
 
-TEST(MshWrite, RejectsNonPositiveIds) {
-  TetMesh m = sample_mesh();
-  m.node_ids[3] = 0;
-  std::ostringstream s;
-  const Result<void> r = write_msh(s, m);
-  ASSERT_FALSE(r.ok());
-  EXPECT_NE(r.error().message.find("not positive"), std::string::npos);
-}
-
 TEST(MshRead, Version22PhysicalTagsMixedElements) {
   const Result<std::string> bytes = read_file(test::data_path("mesh/two_regions_v22.msh"));
   ASSERT_OK(bytes);
