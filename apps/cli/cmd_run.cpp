@@ -70,7 +70,13 @@ int run(const RunArgs& args) {
   const auto old_handler = std::signal(SIGINT, on_interrupt);
   auto summary = run_scene(*scene, options);
   std::signal(SIGINT, old_handler);
-  if (!summary) return report_error(summary.error().to_string(), kExitOutput);
+  if (!summary) {
+    // An output that could not be written names a file in the output folder (exit 4); anything
+    // else is the scene's (a body's mesh, an action: exit 3).
+    const std::string& file = summary.error().file;
+    const bool output = !options.out_dir.empty() && file.rfind(options.out_dir, 0) == 0 && file != scene->file;
+    return report_error(summary.error().to_string(), output ? kExitOutput : kExitBadInput);
+  }
   const RunSummary& s = *summary;
   if (args.json) {
     nlohmann::json j{{"scene", scene->name}, {"steps", s.steps},   {"simulated_time", s.simulated_time},

@@ -156,8 +156,37 @@ void set_tet_rest_check(ModelKind kind) {
   EXPECT_LT(total_energy(model, x), 1e-20);
 }
 
+// The corotated fast path (four-lane polar decomposition) against the reference where its Newton
+// iteration works hardest or cannot work: large rotations, stretches of 3x, squashed tets and
+// inverted ones (those lanes fall back to the SVD), and per-tet deformations that differ within a
+// group of four.
+TEST(FemModel, CorotatedFastPathUnderLargeDeformationAndInversion) {
+  Random rng(31);
+  const TetMesh mesh = make_box_mesh({.max = Vec3(1, 0.5, 0.5), .cells = {12, 6, 6}, .jitter = 0.2, .seed = 4});
+  const FemModel model = make_fem_model(mesh, test_material(), ModelKind::corotated);
+  for (double amount : {0.0, 0.3, 2.0}) {
+    SCOPED_TRACE(amount);
+    std::vector<Vec3> x = affine(mesh.positions, test::random_deformation(rng, amount), Vec3(-3, 1, 2));
+    for (Vec3& p : x) p += rng.uniform_vec3(-0.05, 0.05);
+    // Flatten a few nodes onto their neighbours and push others through: degenerate and inverted tets.
+    for (std::size_t i = 0; i < x.size(); i += 37) x[i] = x[(i + 1) % x.size()];
+    for (std::size_t i = 5; i < x.size(); i += 41) x[i] += Vec3(0.3, -0.2, 0.25);
+    std::vector<Vec3> f_ref, f1, f2;
+    internal_forces_reference(model, x, f_ref);
+    const int saved = num_threads();
+    set_num_threads(1);
+    internal_forces(model, x, f1);
+    set_num_threads(2);
+    internal_forces(model, x, f2);
+    set_num_threads(saved);
+    EXPECT_LT(max_diff(f1, f_ref), 1e-10 * max_norm(f_ref));
+    EXPECT_EQ(f1, f2);
+    for (const Vec3& f : f1) ASSERT_TRUE(f.allFinite());
+  }
+}
+
 TEST(FemModel, SetTetRest) {
-  for (ModelKind kind : {ModelKind::stvk, ModelKind::linear}) set_tet_rest_check(kind);
+  for (ModelKind kind : {ModelKind::stvk, ModelKind::linear, ModelKind::corotated}) set_tet_rest_check(kind);
 }
 
 // The global force is the gradient of the total energy (central differences on a few nodes).

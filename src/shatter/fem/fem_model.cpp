@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 #include "shatter/core/parallel.h"
 
@@ -14,17 +15,20 @@ namespace {
 
 constexpr std::int64_t kBlockSize = 1024;  // tets per block; fixed so results ignore thread count
 
-// Upper-triangular R of Dm = Q^T R (Householder QR), returned as the 6 entries of R^-1.
+// Upper-triangular R of Dm = Q^T R (Householder QR) with Q a rotation, returned as the 6 entries of
+// R^-1. Householder's Q may be a reflection; then the last row of R and of Q change sign, so that
+// F' = F Q^T keeps the sign of det F (the corotated model's polar rotation needs it; StVK's C = F'^T F'
+// does not see it).
 std::array<double, 6> rotated_rest_inverse(const TetRest& rest) {
   const Mat3 Dm = rest.Dm_inv.inverse();
   const Eigen::HouseholderQR<Mat3> qr(Dm);
-  const Mat3 R = qr.matrixQR().triangularView<Eigen::Upper>();
+  Mat3 R = qr.matrixQR().triangularView<Eigen::Upper>();
+  if (Dm.determinant() * R(0, 0) * R(1, 1) * R(2, 2) < 0) R.row(2) = -R.row(2);  // det Q = det Dm / det R
   const Mat3 Rinv = R.triangularView<Eigen::Upper>().solve(Mat3::Identity());
   return {Rinv(0, 0), Rinv(0, 1), Rinv(0, 2), Rinv(1, 1), Rinv(1, 2), Rinv(2, 2)};
 }
 
-// Rows per tet of FastTetData::packed: StVK (and corotated, which does not read it) keep R^-1 of
-// the rotated rest frame and V; the linear model, which is not rotation invariant, Dm^-1 and V.
+// Rows per tet of FastTetData::packed: StVK and corotated keep R^-1 of the rotated rest frame and V; the linear model, which is not rotation invariant, Dm^-1 and V.
 int packed_rows(ModelKind kind) { return kind == ModelKind::linear ? 10 : 7; }
 
 void store_fast_rest(FemModel& model, std::size_t e) {
@@ -114,6 +118,131 @@ typedef double Lanes __attribute__((vector_size(4 * sizeof(double))));
       s[1] += out[3 * k + 1][l];
       s[2] += out[3 * k + 2][l];
     }
+  }
+}
+
+// Lane-wise comparisons give a mask of 0 / -1 per lane.
+typedef long long LaneMask __attribute__((vector_size(4 * sizeof(long long))));
+
+// Lane-wise max and square root; a and b are plain names (each is read more than once). Macros, as
+// no helper here returns a vector by value (see above).
+#define SHATTER_LANE_MAX(a, b) ((a) > (b) ? (a) : (b))
+#define SHATTER_LANE_SQRT(a) Lanes{std::sqrt((a)[0]), std::sqrt((a)[1]), std::sqrt((a)[2]), std::sqrt((a)[3])}
+
+// m = max_ij |a_ij - b_ij| of two 3x3 matrices (row-major, nine lane vectors each).
+[[gnu::always_inline]] inline void lane_max_abs_difference(const Lanes* a, const Lanes* b, Lanes* m) {
+  *m = Lanes{0, 0, 0, 0};
+  for (int i = 0; i < 9; ++i) {
+    const Lanes d = a[i] - b[i];
+    const Lanes nd = -d;
+    const Lanes ad = SHATTER_LANE_MAX(d, nd);
+    *m = SHATTER_LANE_MAX(*m, ad);
+  }
+}
+// y = x^-T of a 3x3 matrix per lane (row-major) and det x: with a, b, c the columns of x,
+// x^-T = [b x c, c x a, a x b] / det.
+[[gnu::always_inline]] inline void lane_inverse_transpose(const Lanes* x, Lanes* y, Lanes* det) {
+  const Lanes bc0 = x[4] * x[8] - x[7] * x[5], bc1 = x[7] * x[2] - x[1] * x[8], bc2 = x[1] * x[5] - x[4] * x[2];
+  const Lanes ca0 = x[5] * x[6] - x[8] * x[3], ca1 = x[8] * x[0] - x[2] * x[6], ca2 = x[2] * x[3] - x[5] * x[0];
+  const Lanes ab0 = x[3] * x[7] - x[6] * x[4], ab1 = x[6] * x[1] - x[0] * x[7], ab2 = x[0] * x[4] - x[3] * x[1];
+  *det = x[0] * bc0 + x[3] * bc1 + x[6] * bc2;
+  const Lanes inv = 1.0 / *det;
+  y[0] = bc0 * inv, y[1] = ca0 * inv, y[2] = ab0 * inv;
+  y[3] = bc1 * inv, y[4] = ca1 * inv, y[5] = ab1 * inv;
+  y[6] = bc2 * inv, y[7] = ca2 * inv, y[8] = ab2 * inv;
+}
+
+// R of the polar decomposition F = R S of four 3x3 matrices (row-major lanes), by Higham's scaled
+// Newton iteration as polar_decomposition does (constitutive.cpp): X <- (z X + X^-T / z) / 2 with
+// z = (|X^-T|_F / |X|_F)^(1/2) while a lane's step is large, plain Newton after; all lanes step
+// together until every one has moved by at most 1e-8, then one more plain step lands them at
+// round-off. A lane that is inverted, nearly singular (det F below 1e-6 of max|F|^3) or not
+// converged in 30 steps gets polar_decomposition's answer (SVD where Newton cannot), so each lane's
+// R is a rotation. Deterministic: a lane's steps depend on its group of four, which is fixed.
+// Lanes from `lanes` on are padding: left as they come.
+[[gnu::always_inline]] inline void lane_polar_rotation(const Lanes* F, int lanes, Lanes* R) {
+  Lanes scale = Lanes{0, 0, 0, 0};
+  for (int i = 0; i < 9; ++i) {
+    const Lanes nf = -F[i];
+    const Lanes af = SHATTER_LANE_MAX(F[i], nf);
+    scale = SHATTER_LANE_MAX(scale, af);
+  }
+  Lanes X[9], Y[9], det;
+  for (int i = 0; i < 9; ++i) X[i] = F[i];
+  LaneMask ok{};
+  bool converged = false, fixed_steps = false;
+  // Near a rotation (every stiff body under load), a fixed count of plain steps suffices and no step
+  // needs checking. With F = U (I + E) and m = max|F^T F - I|, |E| <= 1.6 m for m <= 0.03, and a
+  // plain step maps |E| to at most |E|^2 / (2 (1 - |E|)): from |E| <= 0.05, four steps reach 1e-25
+  // (round-off); from |E| <= 1e-3, three.
+  {
+    const Lanes c00 = F[0] * F[0] + F[3] * F[3] + F[6] * F[6], c11 = F[1] * F[1] + F[4] * F[4] + F[7] * F[7],
+                c22 = F[2] * F[2] + F[5] * F[5] + F[8] * F[8], c01 = F[0] * F[1] + F[3] * F[4] + F[6] * F[7],
+                c02 = F[0] * F[2] + F[3] * F[5] + F[6] * F[8], c12 = F[1] * F[2] + F[4] * F[5] + F[7] * F[8];
+    const Lanes defect[6] = {c00 - 1.0, c11 - 1.0, c22 - 1.0, c01, c02, c12};
+    Lanes m = Lanes{0, 0, 0, 0};
+    for (const Lanes& d : defect) {
+      const Lanes nd = -d;
+      const Lanes ad = SHATTER_LANE_MAX(d, nd);
+      m = SHATTER_LANE_MAX(m, ad);
+    }
+    bool four = true, three = true;
+    for (int l = 0; l < lanes; ++l) {
+      four = four && m[l] <= 0.03;  // false for NaN too
+      three = three && m[l] <= 6e-4;
+    }
+    if (four) {
+      for (int step = 0; step < (three ? 3 : 4); ++step) {
+        lane_inverse_transpose(X, Y, &det);
+        if (step == 0)
+          ok = det > 1e-6 * scale * scale * scale;  // det F: an inverted lane converges to a reflection
+        else
+          ok &= det > 0.0;
+        for (int i = 0; i < 9; ++i) X[i] = 0.5 * (X[i] + Y[i]);
+      }
+      for (int i = 0; i < 9; ++i) R[i] = X[i];
+      converged = fixed_steps = true;
+    }
+  }
+  for (int step = 0; step < 30 && !converged; ++step) {
+    lane_inverse_transpose(X, Y, &det);
+    if (step == 0)
+      ok = det > 1e-6 * scale * scale * scale;  // det F
+    else
+      ok &= det > 0.0;
+    Lanes change0, change;
+    lane_max_abs_difference(X, Y, &change0);
+    Lanes nx = X[0] * X[0], ny = Y[0] * Y[0];
+    for (int i = 1; i < 9; ++i) nx += X[i] * X[i], ny += Y[i] * Y[i];
+    const Lanes ratio = ny / nx;
+    const Lanes root2 = SHATTER_LANE_SQRT(ratio);
+    const Lanes root4 = SHATTER_LANE_SQRT(root2);
+    const Lanes one = Lanes{1, 1, 1, 1};
+    const Lanes z = change0 > 1e-2 ? root4 : one;
+    const Lanes zi = 1.0 / z;
+    Lanes next[9];
+    for (int i = 0; i < 9; ++i) next[i] = 0.5 * (z * X[i] + Y[i] * zi);
+    lane_max_abs_difference(next, X, &change);
+    for (int i = 0; i < 9; ++i) X[i] = next[i];
+    const LaneMask done = (change <= 1e-8) | ~ok;  // failed lanes are left to the fallback
+    converged = done[0] && done[1] && done[2] && done[3];
+  }
+  if (!fixed_steps) {
+    for (int i = 0; i < 9; ++i) R[i] = X[i];
+    if (converged) {  // the checked iteration ends with one more plain step
+      lane_inverse_transpose(X, Y, &det);
+      ok &= det > 0.0;
+      for (int i = 0; i < 9; ++i) R[i] = 0.5 * (X[i] + Y[i]);
+    }
+  }
+  for (int l = 0; l < lanes; ++l) {
+    bool finite = converged && ok[l] != 0;
+    for (int i = 0; i < 9 && finite; ++i) finite = std::isfinite(R[i][l]);
+    if (finite) continue;
+    Mat3 f;
+    for (int i = 0; i < 9; ++i) f(i / 3, i % 3) = F[i][l];
+    const Mat3 r = polar_decomposition(f).R;
+    for (int i = 0; i < 9; ++i) R[i][l] = r(i / 3, i % 3);
   }
 }
 
@@ -224,9 +353,51 @@ void linear_forces_block(const double* packed, const TetIndices* tets, const std
   }
 }
 
+// Corotated forces of the tets [lo, hi) of one block (lo a multiple of 4) in their QR-rotated rest
+// frames, like StVK's: F' = Ds R^-1 = F Q^T has the polar rotation R Q^T and the same S up to Q,
+// so P' = 2 mu (F' - R') + lambda tr(R'^T F' - I) R' = P Q^T and H = V P' R^-T = V P Dm^-T
+// (docs/method.md §2.2); f0 = -(f1 + f2 + f3); added into the block's slots in tet order.
+[[gnu::target_clones("avx2", "default")]]
+void corotated_forces_block(const double* packed, const TetIndices* tets, const std::int32_t* corner_slot,
+                            const Vec3* x, std::int64_t lo, std::int64_t hi, double mu, double lambda, double* slots) {
+  for (std::int64_t g0 = lo; g0 < hi; g0 += 4) {
+    const int lanes = static_cast<int>(std::min<std::int64_t>(4, hi - g0));
+    const Vec3* c[4][4];  // [lane][corner]
+    gather_corners(tets, x, g0, lanes, c);
+    const double* r = packed + 7 * g0;  // 7 lane vectors per group of 4 tets
+    const Lanes r00 = SHATTER_LOAD(r), r01 = SHATTER_LOAD(r + 4), r02 = SHATTER_LOAD(r + 8), r11 = SHATTER_LOAD(r + 12),
+                r12 = SHATTER_LOAD(r + 16), r22 = SHATTER_LOAD(r + 20), vol = SHATTER_LOAD(r + 24);
+    const Lanes d0x = SHATTER_EDGE(1, 0), d0y = SHATTER_EDGE(1, 1), d0z = SHATTER_EDGE(1, 2);
+    const Lanes d1x = SHATTER_EDGE(2, 0), d1y = SHATTER_EDGE(2, 1), d1z = SHATTER_EDGE(2, 2);
+    const Lanes d2x = SHATTER_EDGE(3, 0), d2y = SHATTER_EDGE(3, 1), d2z = SHATTER_EDGE(3, 2);
+    // F' row-major: columns a = d0 r00, b = d0 r01 + d1 r11, c = d0 r02 + d1 r12 + d2 r22.
+    const Lanes F[9] = {d0x * r00, d0x * r01 + d1x * r11, d0x * r02 + d1x * r12 + d2x * r22,
+                        d0y * r00, d0y * r01 + d1y * r11, d0y * r02 + d1y * r12 + d2y * r22,
+                        d0z * r00, d0z * r01 + d1z * r11, d0z * r02 + d1z * r12 + d2z * r22};
+    Lanes R[9];
+    lane_polar_rotation(F, lanes, R);
+    // V P' = 2 mu V (F' - R') + lambda V (tr(R'^T F') - 3) R'.
+    Lanes tr = R[0] * F[0];
+    for (int i = 1; i < 9; ++i) tr += R[i] * F[i];
+    const Lanes vmu2 = vol * (2.0 * mu), vlt = vol * lambda * (tr - 3.0);
+    Lanes P[9];
+    for (int i = 0; i < 9; ++i) P[i] = vmu2 * (F[i] - R[i]) + vlt * R[i];
+    // H = V P' R^-T with the columns p, q, s of V P'; f0 = -(f1 + f2 + f3).
+    const Lanes f1x = P[0] * r00 + P[1] * r01 + P[2] * r02, f1y = P[3] * r00 + P[4] * r01 + P[5] * r02,
+                f1z = P[6] * r00 + P[7] * r01 + P[8] * r02;
+    const Lanes f2x = P[1] * r11 + P[2] * r12, f2y = P[4] * r11 + P[5] * r12, f2z = P[7] * r11 + P[8] * r12;
+    const Lanes f3x = P[2] * r22, f3y = P[5] * r22, f3z = P[8] * r22;
+    const Lanes out[12] = {
+        -(f1x + f2x + f3x), -(f1y + f2y + f3y), -(f1z + f2z + f3z), f1x, f1y, f1z, f2x, f2y, f2z, f3x, f3y, f3z};
+    scatter_corner_forces(out, corner_slot, g0, lanes, slots);
+  }
+}
+
 }  // namespace detail
 #undef SHATTER_EDGE
 #undef SHATTER_LOAD
+#undef SHATTER_LANE_MAX
+#undef SHATTER_LANE_SQRT
 #pragma GCC diagnostic pop
 
 FemModel make_fem_model(const TetMesh& rest_mesh, const Material& material, ModelKind kind) {
@@ -316,6 +487,11 @@ void internal_forces(const FemModel& model, const std::vector<Vec3>& x, std::vec
         if (model.model == ModelKind::linear) {
           detail::linear_forces_block(fd.packed.data(), model.tets.data(), fd.corner_slot.data(), xp, lo, hi,
                                       model.lame.mu, model.lame.lambda, slots);
+          return;
+        }
+        if (model.model == ModelKind::corotated) {
+          detail::corotated_forces_block(fd.packed.data(), model.tets.data(), fd.corner_slot.data(), xp, lo, hi,
+                                         model.lame.mu, model.lame.lambda, slots);
           return;
         }
         for (std::int64_t e = lo; e < hi; ++e) {

@@ -771,7 +771,7 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
   if (write) {
     std::error_code ec;
     std::filesystem::create_directories(std::filesystem::path(options.out_dir) / (vtu ? "frames" : ""), ec);
-    if (ec) return make_error(options.out_dir + ": cannot create the output folder: " + ec.message());
+    if (ec) return file_error(options.out_dir, "cannot create the output folder: " + ec.message());
     batch.emplace();
   }
   // Names of bodies for the summary: the scene's, and "<parent>.<k>" for fragments.
