@@ -426,8 +426,8 @@ TEST(HostileInput, SparseHugeFile) {
   const fs::path huge = dir.path() / "huge.msh";
   write_all(huge, "$MeshFormat\n");
   fs::resize_file(huge, 10ULL << 30);
-  for (const std::string& args : {"inspect " + quoted(huge.string()),
-                                  "convert " + quoted(huge.string()) + " " + quoted(dir.file("out.vtu"))}) {
+  for (const std::string& args :
+       {"inspect " + quoted(huge.string()), "convert " + quoted(huge.string()) + " " + quoted(dir.file("out.vtu"))}) {
     const RunResult r = check_run(args, {{3}, huge.string(), false, {}}, "a sparse 10 GiB file", 20);
     EXPECT_NE(r.err.find("is a sparse file"), std::string::npos) << r.err;
   }
@@ -440,11 +440,11 @@ TEST(HostileInput, SurfaceWithAStrayVertex) {
   SHATTER_REQUIRE_TOOL(have_cli(), "shatter executable not built");
   test::TempDir dir;
   const std::string cli = test::cli_path();
-  ASSERT_EQ(test::run_command(cli + " mesh --primitive sphere --radius 0.1 -n 2000 -o " + quoted(dir.file("s.vtu")) +
-                              " && " + cli + " convert -q --binary " + quoted(dir.file("s.vtu")) + " " +
-                              quoted(dir.file("s.stl")))
-                .status,
-            0);
+  ASSERT_EQ(
+      test::run_command(cli + " mesh --primitive sphere --radius 0.1 -n 2000 -o " + quoted(dir.file("s.vtu")) + " && " +
+                        cli + " convert -q --binary " + quoted(dir.file("s.vtu")) + " " + quoted(dir.file("s.stl")))
+          .status,
+      0);
   const std::string stl = read_all(dir.path() / "s.stl");
   ASSERT_GT(stl.size(), 84U + 50 * 6);
   auto stray = [&](float x, const std::string& name) {
@@ -454,8 +454,9 @@ TEST(HostileInput, SurfaceWithAStrayVertex) {
     return quoted(dir.file(name));
   };
   const auto start = std::chrono::steady_clock::now();
-  const RunResult fine = check_run("mesh --surface " + stray(300.0F, "far.stl") + " -H 0.01 -o " + quoted(dir.file("m.vtu")),
-                             {{3}, "far.stl", false, {}}, "a stray vertex 300 m away", 30);
+  const RunResult fine =
+      check_run("mesh --surface " + stray(300.0F, "far.stl") + " -H 0.01 -o " + quoted(dir.file("m.vtu")),
+                {{3}, "far.stl", false, {}}, "a stray vertex 300 m away", 30);
   EXPECT_NE(fine.err.find("GiB"), std::string::npos) << fine.err;
   EXPECT_NE(fine.err.find("300.1 x 0.2"), std::string::npos) << fine.err;  // the bounds, so the user sees why
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);

@@ -133,6 +133,9 @@ struct ImpactResult {
   /// Signed display stress of each parent tet under the load (TetStress::display, Pa, #tets):
   /// tension positive, for the stress view (empty when nothing was solved).
   std::vector<double> display_stress;
+  /// Largest principal stress of each parent tet under the load (TetStress::principal[0], Pa,
+  /// #tets; empty when nothing was solved).
+  std::vector<double> principal_stress;
   bool dented = false;             ///< plasticity changed the rest shape
   std::vector<CrackEvent> cracks;  ///< cracks cut, in order
   /// Empty: the body is unchanged (maybe with more plastic strain, see plastic_strain). One: the

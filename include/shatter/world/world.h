@@ -292,6 +292,9 @@ class World {
   /// (Pa; tension positive, compression negative: the paper's Fig. 7), carried into fragments;
   /// empty until the body is first analysed. For display only: it is not part of the state hash.
   [[nodiscard]] std::span<const double> display_stress(BodyId id) const { return body(id).display_stress; }
+  /// Largest principal stress per tet under the same load (Pa, tension positive), kept and carried
+  /// like display_stress; display only.
+  [[nodiscard]] std::span<const double> principal_stress(BodyId id) const { return body(id).principal_stress; }
   /// The body's boundary surface at its pose: world positions, triangles, crack flags and rest
   /// coordinates for solid textures (empty for planes and hulls).
   [[nodiscard]] BodySurface surface(BodyId id) const;
@@ -363,6 +366,7 @@ class World {
     std::shared_ptr<const ImpactSettings> impact;
     std::vector<double> plastic_strain;    ///< per tet of model
     std::vector<double> display_stress;    ///< per tet of model under the last load, Pa (display only)
+    std::vector<double> principal_stress;  ///< per tet under the last load, Pa (display only)
     std::shared_ptr<StaticSolver> solver;  ///< kept between impacts
   };
   struct PairRef {

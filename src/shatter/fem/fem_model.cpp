@@ -127,7 +127,8 @@ typedef long long LaneMask __attribute__((vector_size(4 * sizeof(long long))));
 // Lane-wise max and square root; a and b are plain names (each is read more than once). Macros, as
 // no helper here returns a vector by value (see above).
 #define SHATTER_LANE_MAX(a, b) ((a) > (b) ? (a) : (b))
-#define SHATTER_LANE_SQRT(a) Lanes{std::sqrt((a)[0]), std::sqrt((a)[1]), std::sqrt((a)[2]), std::sqrt((a)[3])}
+#define SHATTER_LANE_SQRT(a) \
+  Lanes { std::sqrt((a)[0]), std::sqrt((a)[1]), std::sqrt((a)[2]), std::sqrt((a)[3]) }
 
 // m = max_ij |a_ij - b_ij| of two 3x3 matrices (row-major, nine lane vectors each).
 [[gnu::always_inline]] inline void lane_max_abs_difference(const Lanes* a, const Lanes* b, Lanes* m) {

@@ -341,7 +341,11 @@ Result<void> respond(const BodyModel& model, BodyState& state, const std::vector
   t0 = Clock::now();
   std::vector<TetStress> stress = compute_stresses(model.fem, x);
   result.display_stress.resize(stress.size());
-  for (std::size_t e = 0; e < stress.size(); ++e) result.display_stress[e] = stress[e].display;
+  result.principal_stress.resize(stress.size());
+  for (std::size_t e = 0; e < stress.size(); ++e) {
+    result.display_stress[e] = stress[e].display;
+    result.principal_stress[e] = stress[e].principal[0];
+  }
   for (const TetStress& s : stress) {
     result.max_principal_stress = std::max(result.max_principal_stress, s.principal[0]);
     result.max_von_mises = std::max(result.max_von_mises, s.von_mises);

@@ -577,7 +577,7 @@ namespace {
 Result<void> write_frame(const std::string& path, const World& w) {
   TetMesh mesh;
   MeshField body{"body", 1, {}}, parent{"parent", 1, {}}, plastic{"plastic_strain", 1, {}}, rest{"rest", 3, {}},
-      stress{"display_stress", 1, {}};
+      stress{"display_stress", 1, {}}, principal{"max_principal_stress", 1, {}};
   for (Index slot = 0; slot < w.body_count(); ++slot) {
     const BodyId id = w.body_id(slot);
     const BodyModel* m = w.model(id);
@@ -592,6 +592,7 @@ Result<void> write_frame(const std::string& path, const World& w) {
     }
     const std::span<const double> strain = w.plastic_strain(id);
     const std::span<const double> display = w.display_stress(id);
+    const std::span<const double> sigma1 = w.principal_stress(id);
     for (std::size_t e = 0; e < m->mesh.tets.size(); ++e) {
       const TetIndices& t = m->mesh.tets[e];
       mesh.tets.push_back({t[0] + base, t[1] + base, t[2] + base, t[3] + base});
@@ -599,11 +600,13 @@ Result<void> write_frame(const std::string& path, const World& w) {
       parent.values.push_back(static_cast<double>(w.parent(id).index));
       plastic.values.push_back(e < strain.size() ? strain[e] : 0.0);
       stress.values.push_back(e < display.size() ? display[e] : 0.0);
+      principal.values.push_back(e < sigma1.size() ? sigma1[e] : 0.0);
     }
   }
   MeshWriteOptions options;
   options.binary = true;
-  options.fields.tet_fields = {std::move(body), std::move(parent), std::move(plastic), std::move(stress)};
+  options.fields.tet_fields = {std::move(body), std::move(parent), std::move(plastic), std::move(stress),
+                               std::move(principal)};
   options.fields.node_fields = {std::move(rest)};
   return write_mesh(path, mesh, options);
 }

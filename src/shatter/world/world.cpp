@@ -909,16 +909,17 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
                                 .stress = c.plan.stress});
   }
   // The stress view of a piece: its tets show the stress of the parent tets they came from.
-  auto child_stress = [&](const ImpactChild& child) {
+  auto child_stress = [&](const ImpactChild& child, const std::vector<double>& parent_values) {
     std::vector<double> out;
-    if (r.display_stress.empty()) return out;
+    if (parent_values.empty()) return out;
     out.reserve(child.parent_tet.size());
-    for (const Index e : child.parent_tet) out.push_back(r.display_stress[static_cast<std::size_t>(e)]);
+    for (const Index e : child.parent_tet) out.push_back(parent_values[static_cast<std::size_t>(e)]);
     return out;
   };
   if (r.children.empty() && r.cracks.empty()) {
     bodies_[id].plastic_strain = std::move(r.plastic_strain);
     bodies_[id].display_stress = std::move(r.display_stress);
+    bodies_[id].principal_stress = std::move(r.principal_stress);
     events_.impacts.push_back(rec);
     return;
   }
@@ -935,7 +936,8 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
       body.inertia = rigid_inertia(child.model->mass);
       body.rigid = child.rigid;
       body.plastic_strain = std::move(child.plastic_strain);
-      body.display_stress = child_stress(child);
+      body.display_stress = child_stress(child, r.display_stress);
+      body.principal_stress = child_stress(child, r.principal_stress);
     } else {  // keep the body as it was: nothing was removed
       log_warning("world: body " + std::to_string(id) + " keeps its shape: " + shape.error().message);
       rec.dented = false;
@@ -972,7 +974,8 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
     b.parent = id;
     b.root_mass = parent.root_mass;
     b.plastic_strain = std::move(child.plastic_strain);
-    b.display_stress = child_stress(child);
+    b.display_stress = child_stress(child, r.display_stress);
+    b.principal_stress = child_stress(child, r.principal_stress);
     born.push_back(cid);
     events_.fragments.push_back({.parent = body_id(id), .body = body_id(cid), .mass = mass});
   }
