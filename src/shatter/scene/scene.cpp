@@ -577,7 +577,7 @@ namespace {
 Result<void> write_frame(const std::string& path, const World& w) {
   TetMesh mesh;
   MeshField body{"body", 1, {}}, parent{"parent", 1, {}}, plastic{"plastic_strain", 1, {}}, rest{"rest", 3, {}},
-      stress{"display_stress", 1, {}}, principal{"max_principal_stress", 1, {}};
+      stress{"display_stress", 1, {}}, principal{"max_principal", 1, {}};
   for (Index slot = 0; slot < w.body_count(); ++slot) {
     const BodyId id = w.body_id(slot);
     const BodyModel* m = w.model(id);
