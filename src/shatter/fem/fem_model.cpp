@@ -28,7 +28,8 @@ std::array<double, 6> rotated_rest_inverse(const TetRest& rest) {
   return {Rinv(0, 0), Rinv(0, 1), Rinv(0, 2), Rinv(1, 1), Rinv(1, 2), Rinv(2, 2)};
 }
 
-// Rows per tet of FastTetData::packed: StVK and corotated keep R^-1 of the rotated rest frame and V; the linear model, which is not rotation invariant, Dm^-1 and V.
+// Rows per tet of FastTetData::packed: StVK and corotated keep R^-1 of the rotated rest frame and V;
+// the linear model, which is not rotation invariant, Dm^-1 and V.
 int packed_rows(ModelKind kind) { return kind == ModelKind::linear ? 10 : 7; }
 
 void store_fast_rest(FemModel& model, std::size_t e) {
@@ -95,7 +96,7 @@ void build_blocks(FemModel& model) {
 #pragma GCC diagnostic ignored "-Wpsabi"
 typedef double Lanes __attribute__((vector_size(4 * sizeof(double))));
 
-// The four kernels' shared steps. Always inlined into each target clone (the AVX2 clone then
+// The kernels' shared steps. Always inlined into each target clone (the AVX2 clone then
 // compiles them for AVX2 too); they take vectors only by pointer.
 
 // c[lane][corner]: the corners of tets g0 .. g0 + 3; padding lanes repeat the first tet.
@@ -258,6 +259,45 @@ typedef long long LaneMask __attribute__((vector_size(4 * sizeof(long long))));
 #define SHATTER_LOAD(p) Lanes{(p)[0], (p)[1], (p)[2], (p)[3]}
 // clang-format on
 
+namespace {
+
+// A group of four tets in their QR-rotated rest frames (StVK and corotated): R^-1 (upper
+// triangular), the rest volume V and F' = Ds R^-1 row-major, whose columns are a = d0 r00,
+// b = d0 r01 + d1 r11 and c = d0 r02 + d1 r12 + d2 r22 for the edges d_k = x_{k+1} - x_0.
+struct RotatedFrame {
+  Lanes r00, r01, r02, r11, r12, r22, vol;
+  Lanes F[9];
+};
+
+[[gnu::always_inline]] inline void load_rotated_frame(const double* packed, const Vec3* (&c)[4][4], std::int64_t g0,
+                                                      RotatedFrame* f) {
+  const double* r = packed + 7 * g0;  // 7 lane vectors per group of 4 tets
+  f->r00 = SHATTER_LOAD(r), f->r01 = SHATTER_LOAD(r + 4), f->r02 = SHATTER_LOAD(r + 8);
+  f->r11 = SHATTER_LOAD(r + 12), f->r12 = SHATTER_LOAD(r + 16), f->r22 = SHATTER_LOAD(r + 20);
+  f->vol = SHATTER_LOAD(r + 24);
+  const Lanes d0x = SHATTER_EDGE(1, 0), d0y = SHATTER_EDGE(1, 1), d0z = SHATTER_EDGE(1, 2);
+  const Lanes d1x = SHATTER_EDGE(2, 0), d1y = SHATTER_EDGE(2, 1), d1z = SHATTER_EDGE(2, 2);
+  const Lanes d2x = SHATTER_EDGE(3, 0), d2y = SHATTER_EDGE(3, 1), d2z = SHATTER_EDGE(3, 2);
+  const Lanes &r00 = f->r00, &r01 = f->r01, &r02 = f->r02, &r11 = f->r11, &r12 = f->r12, &r22 = f->r22;
+  f->F[0] = d0x * r00, f->F[1] = d0x * r01 + d1x * r11, f->F[2] = d0x * r02 + d1x * r12 + d2x * r22;
+  f->F[3] = d0y * r00, f->F[4] = d0y * r01 + d1y * r11, f->F[5] = d0y * r02 + d1y * r12 + d2y * r22;
+  f->F[6] = d0z * r00, f->F[7] = d0z * r01 + d1z * r11, f->F[8] = d0z * r02 + d1z * r12 + d2z * r22;
+}
+
+// The corner forces out[3 k + axis] from M = V P' (row-major): [f1 f2 f3] = M R^-T with R^-1
+// upper triangular, f0 = -(f1 + f2 + f3).
+[[gnu::always_inline]] inline void rotated_frame_forces(const Lanes* M, const RotatedFrame& f, Lanes* out) {
+  const Lanes f1x = M[0] * f.r00 + M[1] * f.r01 + M[2] * f.r02, f1y = M[3] * f.r00 + M[4] * f.r01 + M[5] * f.r02,
+              f1z = M[6] * f.r00 + M[7] * f.r01 + M[8] * f.r02;
+  const Lanes f2x = M[1] * f.r11 + M[2] * f.r12, f2y = M[4] * f.r11 + M[5] * f.r12, f2z = M[7] * f.r11 + M[8] * f.r12;
+  const Lanes f3x = M[2] * f.r22, f3y = M[5] * f.r22, f3z = M[8] * f.r22;
+  out[0] = -(f1x + f2x + f3x), out[1] = -(f1y + f2y + f3y), out[2] = -(f1z + f2z + f3z);
+  out[3] = f1x, out[4] = f1y, out[5] = f1z, out[6] = f2x, out[7] = f2y, out[8] = f2z;
+  out[9] = f3x, out[10] = f3y, out[11] = f3z;
+}
+
+}  // namespace
+
 namespace detail {
 
 // StVK forces of the tets [lo, hi) of one block (lo a multiple of 4) in their QR-rotated rest frames
@@ -270,17 +310,12 @@ void stvk_forces_block(const double* packed, const TetIndices* tets, const std::
     const int lanes = static_cast<int>(std::min<std::int64_t>(4, hi - g0));
     const Vec3* c[4][4];  // [lane][corner]
     gather_corners(tets, x, g0, lanes, c);
-    const double* r = packed + 7 * g0;  // 7 lane vectors per group of 4 tets
-    const Lanes r00 = SHATTER_LOAD(r), r01 = SHATTER_LOAD(r + 4), r02 = SHATTER_LOAD(r + 8), r11 = SHATTER_LOAD(r + 12),
-                r12 = SHATTER_LOAD(r + 16), r22 = SHATTER_LOAD(r + 20), vol = SHATTER_LOAD(r + 24);
-    const Lanes d0x = SHATTER_EDGE(1, 0), d0y = SHATTER_EDGE(1, 1), d0z = SHATTER_EDGE(1, 2);
-    const Lanes d1x = SHATTER_EDGE(2, 0), d1y = SHATTER_EDGE(2, 1), d1z = SHATTER_EDGE(2, 2);
-    const Lanes d2x = SHATTER_EDGE(3, 0), d2y = SHATTER_EDGE(3, 1), d2z = SHATTER_EDGE(3, 2);
+    RotatedFrame f;
+    load_rotated_frame(packed, c, g0, &f);
+    const Lanes& vol = f.vol;
     // F' columns a, b, c.
-    const Lanes ax = d0x * r00, ay = d0y * r00, az = d0z * r00;
-    const Lanes bx = d0x * r01 + d1x * r11, by = d0y * r01 + d1y * r11, bz = d0z * r01 + d1z * r11;
-    const Lanes cx = d0x * r02 + d1x * r12 + d2x * r22, cy = d0y * r02 + d1y * r12 + d2y * r22,
-                cz = d0z * r02 + d1z * r12 + d2z * r22;
+    const Lanes &ax = f.F[0], &bx = f.F[1], &cx = f.F[2], &ay = f.F[3], &by = f.F[4], &cy = f.F[5], &az = f.F[6],
+                &bz = f.F[7], &cz = f.F[8];
     // C = F'^T F'.
     const Lanes caa = ax * ax + ay * ay + az * az, cbb = bx * bx + by * by + bz * bz, ccc = cx * cx + cy * cy + cz * cz;
     const Lanes cab = ax * bx + ay * by + az * bz, cac = ax * cx + ay * cy + az * cz, cbc = bx * cx + by * cy + bz * cz;
@@ -297,13 +332,10 @@ void stvk_forces_block(const double* packed, const TetIndices* tets, const std::
                 qz = az * sab + bz * sbb + cz * sbc;
     const Lanes sx = ax * sac + bx * sbc + cx * scc, sy = ay * sac + by * sbc + cy * scc,
                 sz = az * sac + bz * sbc + cz * scc;
-    // H = F' V S' R^-T; f0 = -(f1 + f2 + f3).
-    const Lanes f1x = px * r00 + qx * r01 + sx * r02, f1y = py * r00 + qy * r01 + sy * r02,
-                f1z = pz * r00 + qz * r01 + sz * r02;
-    const Lanes f2x = qx * r11 + sx * r12, f2y = qy * r11 + sy * r12, f2z = qz * r11 + sz * r12;
-    const Lanes f3x = sx * r22, f3y = sy * r22, f3z = sz * r22;
-    const Lanes out[12] = {
-        -(f1x + f2x + f3x), -(f1y + f2y + f3y), -(f1z + f2z + f3z), f1x, f1y, f1z, f2x, f2y, f2z, f3x, f3y, f3z};
+    // H = F' V S' R^-T (columns p, q, s of F' V S').
+    const Lanes M[9] = {px, qx, sx, py, qy, sy, pz, qz, sz};
+    Lanes out[12];
+    rotated_frame_forces(M, f, out);
     scatter_corner_forces(out, corner_slot, g0, lanes, slots);
   }
 }
@@ -365,31 +397,19 @@ void corotated_forces_block(const double* packed, const TetIndices* tets, const 
     const int lanes = static_cast<int>(std::min<std::int64_t>(4, hi - g0));
     const Vec3* c[4][4];  // [lane][corner]
     gather_corners(tets, x, g0, lanes, c);
-    const double* r = packed + 7 * g0;  // 7 lane vectors per group of 4 tets
-    const Lanes r00 = SHATTER_LOAD(r), r01 = SHATTER_LOAD(r + 4), r02 = SHATTER_LOAD(r + 8), r11 = SHATTER_LOAD(r + 12),
-                r12 = SHATTER_LOAD(r + 16), r22 = SHATTER_LOAD(r + 20), vol = SHATTER_LOAD(r + 24);
-    const Lanes d0x = SHATTER_EDGE(1, 0), d0y = SHATTER_EDGE(1, 1), d0z = SHATTER_EDGE(1, 2);
-    const Lanes d1x = SHATTER_EDGE(2, 0), d1y = SHATTER_EDGE(2, 1), d1z = SHATTER_EDGE(2, 2);
-    const Lanes d2x = SHATTER_EDGE(3, 0), d2y = SHATTER_EDGE(3, 1), d2z = SHATTER_EDGE(3, 2);
-    // F' row-major: columns a = d0 r00, b = d0 r01 + d1 r11, c = d0 r02 + d1 r12 + d2 r22.
-    const Lanes F[9] = {d0x * r00, d0x * r01 + d1x * r11, d0x * r02 + d1x * r12 + d2x * r22,
-                        d0y * r00, d0y * r01 + d1y * r11, d0y * r02 + d1y * r12 + d2y * r22,
-                        d0z * r00, d0z * r01 + d1z * r11, d0z * r02 + d1z * r12 + d2z * r22};
+    RotatedFrame f;
+    load_rotated_frame(packed, c, g0, &f);
+    const Lanes* F = f.F;
     Lanes R[9];
     lane_polar_rotation(F, lanes, R);
     // V P' = 2 mu V (F' - R') + lambda V (tr(R'^T F') - 3) R'.
     Lanes tr = R[0] * F[0];
     for (int i = 1; i < 9; ++i) tr += R[i] * F[i];
-    const Lanes vmu2 = vol * (2.0 * mu), vlt = vol * lambda * (tr - 3.0);
+    const Lanes vmu2 = f.vol * (2.0 * mu), vlt = f.vol * lambda * (tr - 3.0);
     Lanes P[9];
     for (int i = 0; i < 9; ++i) P[i] = vmu2 * (F[i] - R[i]) + vlt * R[i];
-    // H = V P' R^-T with the columns p, q, s of V P'; f0 = -(f1 + f2 + f3).
-    const Lanes f1x = P[0] * r00 + P[1] * r01 + P[2] * r02, f1y = P[3] * r00 + P[4] * r01 + P[5] * r02,
-                f1z = P[6] * r00 + P[7] * r01 + P[8] * r02;
-    const Lanes f2x = P[1] * r11 + P[2] * r12, f2y = P[4] * r11 + P[5] * r12, f2z = P[7] * r11 + P[8] * r12;
-    const Lanes f3x = P[2] * r22, f3y = P[5] * r22, f3z = P[8] * r22;
-    const Lanes out[12] = {
-        -(f1x + f2x + f3x), -(f1y + f2y + f3y), -(f1z + f2z + f3z), f1x, f1y, f1z, f2x, f2y, f2z, f3x, f3y, f3z};
+    Lanes out[12];
+    rotated_frame_forces(P, f, out);  // H = V P' R^-T
     scatter_corner_forces(out, corner_slot, g0, lanes, slots);
   }
 }
