@@ -1,11 +1,20 @@
-// Broad phase and rigid integration costs of the scenes the rigid-body targets name: 1,000 pieces
-// resting on a ground slab (spread over 10 x 10 m), and 100 bodies in a pile (a 1 m cube), and the
-// integration step of 1,000 tumbling bodies.
+// Collision and rigid integration costs: the broad phase on the scenes the rigid-body targets name
+// (1,000 pieces resting on a ground slab spread over 10 x 10 m, 100 bodies in a pile in a 1 m cube),
+// the narrow phases (hull against hull and plane, tet mesh against tet mesh), convex hulls, the
+// convex decomposition of bodies and shards, and the integration step of 1,000 tumbling bodies.
 #include <benchmark/benchmark.h>
 
+#include <cmath>
+#include <numbers>
+
 #include "shatter/collide/broad_phase.h"
+#include "shatter/collide/contact.h"
+#include "shatter/collide/convex_decomposition.h"
+#include "shatter/collide/convex_hull.h"
+#include "shatter/collide/tet_contact.h"
 #include "shatter/core/random.h"
 #include "shatter/mesh/generate.h"
+#include "shatter/mesh/topology.h"
 #include "shatter/rigid/integrate.h"
 
 namespace shatter {
@@ -88,6 +97,130 @@ void BM_RigidIntegrate(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * state.range(0));
 }
 BENCHMARK(BM_RigidIntegrate)->Arg(1000)->Unit(benchmark::kMicrosecond);
+
+// `n` points uniform in a ball of radius `radius`.
+std::vector<Vec3> random_ball(Random& rng, int n, double radius) {
+  std::vector<Vec3> p;
+  while (static_cast<int>(p.size()) < n) {
+    const Vec3 q = rng.uniform_vec3(-radius, radius);
+    if (q.norm() <= radius) p.push_back(q);
+  }
+  return p;
+}
+
+void BM_ConvexHull(benchmark::State& state) {
+  Random rng(99);
+  const std::vector<Vec3> points = random_ball(rng, static_cast<int>(state.range(0)), 1.0);
+  std::size_t vertices = 0;
+  for (auto _ : state) {
+    auto hull = build_convex_hull(points);
+    if (!hull.ok()) {
+      state.SkipWithError(hull.error().message.c_str());
+      break;
+    }
+    vertices = hull->vertices.size();
+  }
+  state.counters["vertices"] = static_cast<double>(vertices);
+}
+BENCHMARK(BM_ConvexHull)->Arg(1000)->Arg(10000)->Unit(benchmark::kMicrosecond);
+
+// The hull of a box of half-extents `half` about the origin.
+ConvexHull box_hull(const Vec3& half) {
+  std::vector<Vec3> corners;
+  for (int i = 0; i < 8; ++i)
+    corners.emplace_back((i & 1) ? half.x() : -half.x(), (i & 2) ? half.y() : -half.y(),
+                         (i & 4) ? half.z() : -half.z());
+  return build_convex_hull(corners).value();
+}
+
+Transform at(const Vec3& translation, const Mat3& rotation = Mat3::Identity()) { return {rotation, translation}; }
+Mat3 turn(double angle, const Vec3& axis) { return Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix(); }
+
+// Hull contacts: 0 a unit box resting on another (turned 0.3 rad), 1 two boxes apart with the
+// separating-axis cache, 2 two 32-vertex hulls touching, 3 a box on a plane.
+void BM_HullContact(benchmark::State& state) {
+  const int which = static_cast<int>(state.range(0));
+  const ConvexHull box = box_hull(Vec3::Constant(0.5));
+  Random rng(8);
+  std::vector<Vec3> sphere_points;
+  for (int i = 0; i < 32; ++i) sphere_points.push_back(rng.unit_vec3());
+  const ConvexHull round = build_convex_hull(sphere_points).value();
+  const Mat3 tumble = Eigen::AngleAxisd(rng.uniform(0, 2 * std::numbers::pi), rng.unit_vec3()).toRotationMatrix();
+  SatCache cache;
+  int points = 0;
+  for (auto _ : state) {
+    ContactManifold m;
+    switch (which) {
+      case 0:
+        m = collide_hulls(box, at(Vec3::Zero()), box, at(Vec3(0.1, 1 - 1e-4, 0.05), turn(0.3, Vec3::UnitY())), 0.01);
+        break;
+      case 1: m = collide_hulls(box, at(Vec3::Zero()), box, at(Vec3(3, 0, 0)), 0.01, &cache); break;
+      case 2: m = collide_hulls(round, at(Vec3::Zero()), round, at(Vec3(0, 1.9, 0), tumble), 0.01); break;
+      default: m = collide_hull_plane(box, at(Vec3(0, 0.5, 0)), Plane{}, 0.01); break;
+    }
+    points = m.count;
+    benchmark::DoNotOptimize(m);
+  }
+  state.counters["points"] = points;
+}
+BENCHMARK(BM_HullContact)->ArgName("case")->DenseRange(0, 3)->Unit(benchmark::kNanosecond);
+
+// Tet-mesh contact: two ~1,000-tet jittered boxes in shallow contact (1 mm), one turned 0.2 rad;
+// 5 mm speculative distance.
+void BM_TetContact(benchmark::State& state) {
+  auto shape = [](std::uint64_t seed) {
+    const TetMesh m =
+        make_box_mesh({.min = Vec3::Zero(), .max = Vec3(1, 0.5, 1), .cells = {7, 3, 8}, .jitter = 0.2, .seed = seed});
+    return make_tet_contact_shape(m, compute_faces(m));
+  };
+  const TetContactShape a = shape(1), b = shape(2);
+  const Transform ta = at(Vec3::Zero());
+  const Transform tb = at(Vec3(0.3, 0.499, 0.2), turn(0.2, Vec3::UnitY()));
+  std::vector<PointContact> out;
+  for (auto _ : state) {
+    out.clear();
+    collide_tet_shapes(a, ta, b, tb, 5e-3, out);
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.counters["contacts"] = static_cast<double>(out.size());
+}
+BENCHMARK(BM_TetContact)->Unit(benchmark::kMicrosecond);
+
+// Convex decomposition: 0 a jittered 3^3-cell shard, 1 a bent plate, 2 a 5,000-tet jittered box,
+// 3 a thick half ring.
+TetMesh arc_mesh(std::array<Index, 3> cells, double angle, double thickness) {
+  TetMesh mesh = make_box_mesh({.min = Vec3(0, 0, 0), .max = Vec3(1, thickness, 0.2), .cells = cells});
+  for (Vec3& p : mesh.positions) {
+    const double a = angle * p.x(), r = 1 + p.y();
+    p = Vec3(r * std::cos(a), p.z(), r * std::sin(a));
+  }
+  for (TetIndices& t : mesh.tets)
+    if (signed_volume(mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]], mesh.positions[t[3]]) < 0)
+      std::swap(t[2], t[3]);
+  return mesh;
+}
+
+void BM_ConvexDecomposition(benchmark::State& state) {
+  const int which = static_cast<int>(state.range(0));
+  const TetMesh mesh = which == 0   ? make_box_mesh({.cells = {3, 3, 3}, .jitter = 0.2})
+                       : which == 1 ? arc_mesh({12, 2, 2}, 0.8 * std::numbers::pi, 0.1)
+                       : which == 2
+                           ? make_box_mesh({.cells = cells_for_tet_count(Vec3(1, 0.5, 2), 5000), .jitter = 0.2})
+                           : arc_mesh({60, 5, 3}, std::numbers::pi, 0.25);
+  const TetFaces faces = compute_faces(mesh);
+  std::size_t pieces = 0;
+  for (auto _ : state) {
+    auto r = decompose_convex(mesh, faces);
+    if (!r.ok()) {
+      state.SkipWithError(r.error().message.c_str());
+      break;
+    }
+    pieces = r->size();
+  }
+  state.counters["tets"] = mesh.num_tets();
+  state.counters["pieces"] = static_cast<double>(pieces);
+}
+BENCHMARK(BM_ConvexDecomposition)->ArgName("case")->DenseRange(0, 3)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace shatter

@@ -7,8 +7,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <ctime>
-#include <functional>
 #include <map>
 #include <numbers>
 #include <set>
@@ -676,38 +674,6 @@ TEST(Contact, FeatureIdsStayWhileABoxRests) {
       }
     }
   }
-}
-
-// Processor time per call, ns (std::clock: not counting time the machine gives to others).
-double time_ns(const std::function<void()>& f, int n) {
-  const std::clock_t t0 = std::clock();
-  for (int i = 0; i < n; ++i) f();
-  return 1e9 * static_cast<double>(std::clock() - t0) / CLOCKS_PER_SEC / n;
-}
-
-TEST(Contact, Timing) {
-  const ConvexHull box = make_box(Vec3::Constant(0.5));
-  int sink = 0;
-  const Transform tb = at(Vec3(0.1, 1 - 1e-4, 0.05), rot(0.3, Vec3::UnitY()));
-  const double box_ns = time_ns([&] { sink += collide_hulls(box, at(Vec3::Zero()), box, tb, 0.01).count; }, 100000);
-  SatCache cache;
-  const Transform far = at(Vec3(3, 0, 0));
-  const double cached_ns =
-      time_ns([&] { sink += collide_hulls(box, at(Vec3::Zero()), box, far, 0.01, &cache).count; }, 100000);
-  Random rng(8);
-  std::vector<Vec3> p;
-  for (int i = 0; i < 32; ++i) p.push_back(rng.unit_vec3());
-  const ConvexHull round = build_convex_hull(p).value();
-  const Transform tr = at(Vec3(0, 1.9, 0), random_rotation(rng));
-  const double round_ns =
-      time_ns([&] { sink += collide_hulls(round, at(Vec3::Zero()), round, tr, 0.01).count; }, 20000);
-  const double plane_ns =
-      time_ns([&] { sink += collide_hull_plane(box, at(Vec3(0, 0.5, 0)), Plane{}, 0.01).count; }, 100000);
-  std::printf(
-      "timing: box-box resting %.0f ns, box-box separated with cache %.0f ns, 32-vertex hulls (%zu faces) %.0f ns, "
-      "box-plane %.0f ns (%d)\n",
-      box_ns, cached_ns, round.faces.size(), round_ns, plane_ns, sink & 1);
-  SUCCEED();
 }
 
 }  // namespace

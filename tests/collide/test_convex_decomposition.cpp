@@ -1,9 +1,8 @@
 // Convex decomposition: a box is one piece, an L two or three, a bent shell several; every tet in
-// exactly one piece, every piece's hull holding its tets' nodes, the result repeatable; timings of
-// a shard and of a 5,000-tet body.
+// exactly one piece, every piece's hull holding its tets' nodes, the result repeatable (timings:
+// bench_collide's BM_ConvexDecomposition).
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 
@@ -153,37 +152,6 @@ TEST(ConvexDecomposition, BadInputIsAnError) {
   EXPECT_NE(r.error().message.find("no volume"), std::string::npos) << r.error().message;
   const TetMesh box = make_box_mesh({});
   EXPECT_FALSE(decompose_convex(box, compute_faces(flat)).ok());
-}
-
-double time_ms(const TetMesh& mesh, const TetFaces& faces, std::size_t* count) {
-  double best = 1e300;
-  for (int rep = 0; rep < 3; ++rep) {
-    const auto t0 = std::chrono::steady_clock::now();
-    auto pieces = decompose_convex(mesh, faces);
-    const auto t1 = std::chrono::steady_clock::now();
-    EXPECT_TRUE(pieces.ok());
-    *count = pieces->size();
-    best = std::min(best, std::chrono::duration<double, std::milli>(t1 - t0).count());
-  }
-  return best;
-}
-
-TEST(ConvexDecomposition, Timing) {
-  struct Case {
-    const char* name;
-    TetMesh mesh;
-  };
-  std::vector<Case> cases;
-  cases.push_back({"shard: jittered box", make_box_mesh({.cells = {3, 3, 3}, .jitter = 0.2})});
-  cases.push_back({"shard: bent plate", arc_mesh({12, 2, 2}, 0.8 * M_PI, 0.1)});
-  cases.push_back({"body: box", make_box_mesh({.cells = cells_for_tet_count(Vec3(1, 0.5, 2), 5000), .jitter = 0.2})});
-  cases.push_back({"body: half ring", arc_mesh({60, 5, 3}, M_PI, 0.25)});
-  for (const Case& c : cases) {
-    const TetFaces faces = compute_faces(c.mesh);
-    std::size_t count = 0;
-    const double ms = time_ms(c.mesh, faces, &count);
-    std::printf("%-22s %5d tets: %3zu pieces, %.3f ms\n", c.name, c.mesh.num_tets(), count, ms);
-  }
 }
 
 }  // namespace

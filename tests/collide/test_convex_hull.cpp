@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 
@@ -339,24 +338,6 @@ TEST(ConvexHull, CheckCatchesBrokenHulls) {
   EXPECT_EQ(fine->faces.size(), 7u);
   EXPECT_EQ(check_convex_hull(*fine, 1e-14), "");
   EXPECT_NE(check_convex_hull(*fine, 1e-9), "");
-}
-
-TEST(ConvexHull, Timing) {
-  Random rng(99);
-  for (int n : {1000, 10000}) {
-    const std::vector<Vec3> points = random_ball(rng, n, 1.0);
-    double best = 1e300;
-    std::size_t vertices = 0;
-    for (int rep = 0; rep < 5; ++rep) {
-      const auto t0 = std::chrono::steady_clock::now();
-      auto hull = build_convex_hull(points);
-      const auto t1 = std::chrono::steady_clock::now();
-      ASSERT_TRUE(hull.ok());
-      vertices = hull->vertices.size();
-      best = std::min(best, std::chrono::duration<double, std::milli>(t1 - t0).count());
-    }
-    std::printf("hull of %d points in a ball: %zu vertices, %.3f ms\n", n, vertices, best);
-  }
 }
 
 }  // namespace

@@ -4,7 +4,6 @@
 // inputs give the same output sequence.
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -455,38 +454,6 @@ TEST(TetContact, EmptyShapesGiveNothing) {
   EXPECT_FALSE(closest_boundary_point(empty, Vec3::Zero(), 1.0, bp));
   EXPECT_TRUE(collide(a, {}, empty, {}, 1.0).empty());
   EXPECT_TRUE(collide(empty, {}, a, {}, 1.0).empty());
-}
-
-TEST(TetContact, Timing) {
-  // Two ~1,000-tet bodies in shallow contact (1 mm), B turned a little; 5 mm speculative distance.
-  const Vec3 size(1, 0.5, 1);
-  const std::array<Index, 3> cells{7, 3, 8};  // 1,008 tets
-  const auto t0 = std::chrono::steady_clock::now();
-  const auto a = box_shape(Vec3::Zero(), size, cells, BoxMeshDef::Pattern::six, 0.2, 1);
-  const auto b = box_shape(Vec3::Zero(), size, cells, BoxMeshDef::Pattern::six, 0.2, 2);
-  const auto t1 = std::chrono::steady_clock::now();
-  const Transform ta;
-  const Transform tb{rotation_about(Vec3::UnitY(), 0.2), Vec3(0.3, 0.499, 0.2)};
-  std::vector<PointContact> out;
-  // The best of 5 batches (the machine may be shared).
-  const int calls = 100;
-  double call_us = std::numeric_limits<double>::infinity();
-  for (int batch = 0; batch < 5; ++batch) {
-    const auto t2 = std::chrono::steady_clock::now();
-    for (int i = 0; i < calls; ++i) {
-      out.clear();
-      collide_tet_shapes(a, ta, b, tb, 5e-3, out);
-    }
-    const auto t3 = std::chrono::steady_clock::now();
-    call_us = std::min(call_us, std::chrono::duration<double, std::micro>(t3 - t2).count() / calls);
-  }
-  const double build_us = std::chrono::duration<double, std::micro>(t1 - t0).count() / 2;
-  std::printf(
-      "timing: %d + %d tets, %zu + %zu boundary vertices: shape build %.0f us, collide %.1f us per call, "
-      "%zu contacts\n",
-      a.mesh.num_tets(), b.mesh.num_tets(), a.surface.positions.size(), b.surface.positions.size(), build_us, call_us,
-      out.size());
-  EXPECT_FALSE(out.empty());
 }
 
 }  // namespace
