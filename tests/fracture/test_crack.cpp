@@ -1,6 +1,7 @@
 // Crack planning: the r_frac rule, origin order, several cracks per load, time-averaged stress.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -104,6 +105,78 @@ TEST(PlanCracks, RegionDoesNotJumpGaps) {
   const auto plans = plan_cracks(a, stress, mat, {.brittleness = 10, .max_cracks = 1});
   ASSERT_EQ(plans.size(), 1u);
   for (Index e : plans[0].tets) EXPECT_LT(e, t);
+}
+
+TEST(PlanCracks, PerTetStrengthPicksTheWeakestTetFirst) {
+  const TetMesh m = make_box_mesh({.max = Vec3(8, 1, 1), .cells = {16, 2, 2}});
+  const Material mat = test_material(1e6);
+  // Peak tension 1.2 MPa at x = 2.6; strengths 1.1 MPa, but one tet near x = 6 holds only 0.5 MPa.
+  const auto stress = uniaxial(m, Vec3::UnitX(), [](const Vec3& c) { return 1.2e6 - 0.1e6 * std::abs(c.x() - 2.6); });
+  std::vector<double> strength(static_cast<std::size_t>(m.num_tets()), 1.1e6);
+  Index weak = -1;
+  for (Index e = 0; e < m.num_tets() && weak < 0; ++e)
+    if (std::abs(m.corners(e).row(0).mean() - 6.1) < 0.2) weak = e;
+  ASSERT_GE(weak, 0);
+  strength[static_cast<std::size_t>(weak)] = 0.5e6;
+  const CrackOptions options{.brittleness = 0.5, .max_cracks = 2};
+  const std::vector<CrackPlan> plans = plan_cracks(m, stress, mat, options, {}, strength);
+  ASSERT_EQ(plans.size(), 2u);
+  EXPECT_EQ(plans[0].origin_tet, weak);  // 0.86 / 0.5 = 1.7 times its strength, before 1.2 / 1.1
+  EXPECT_NEAR(plans[1].origin.x(), 2.6, 0.3);
+  const double body = m.bounds().extent().norm();
+  const double r_min = options.min_radius_edges * 0.5 * std::sqrt(3.0);  // the cubes' diagonal
+  // The radius follows each origin's own excess over its own strength.
+  EXPECT_NEAR(plans[0].radius, body * 0.5 * (plans[0].stress / 0.5e6 - 1), 1e-9);
+  EXPECT_GT(plans[0].radius, r_min);
+  EXPECT_NEAR(plans[1].radius, r_min, 1e-9);  // 0.5 (1.2 / 1.1 - 1) of the body is less
+  // Every tet at the material's strength plans exactly what no per-tet strengths plan.
+  const std::vector<double> same(static_cast<std::size_t>(m.num_tets()), 1e6);
+  const std::vector<CrackPlan> a = plan_cracks(m, stress, mat, options, {}, same);
+  const std::vector<CrackPlan> b = plan_cracks(m, stress, mat, options);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    EXPECT_EQ(a[k].origin_tet, b[k].origin_tet);
+    EXPECT_EQ(a[k].radius, b[k].radius);
+    EXPECT_EQ(a[k].tets, b[k].tets);
+  }
+  // Strong tets do not crack under a tension over the material's strength.
+  const std::vector<double> strong(static_cast<std::size_t>(m.num_tets()), 2e6);
+  EXPECT_TRUE(plan_cracks(m, stress, mat, options, {}, strong).empty());
+}
+
+TEST(TensileStrengths, FollowWeibullsLawAndTheSeed) {
+  Material mat = test_material(1e6);
+  const TetMesh even = make_box_mesh({.max = Vec3(2, 1, 1), .cells = {40, 20, 20}});  // 96,000 equal tets
+  EXPECT_TRUE(sample_tensile_strengths(even, mat, 1).empty());                        // no modulus: one strength
+  mat.weibull_modulus = 8;
+  const std::vector<double> s = sample_tensile_strengths(even, mat, 1);
+  ASSERT_EQ(s.size(), even.tets.size());
+  // The empirical distribution against P(s < x sigma_t) = 1 - exp(-ln 2 x^m); the
+  // Dvoretzky-Kiefer-Wolfowitz bound at 96,000 samples is 0.008 with probability 1 - 1e-5 (and
+  // the draw is deterministic).
+  for (const double x : {0.7, 0.85, 0.95, 1.0, 1.05, 1.15, 1.3}) {
+    const auto below = static_cast<double>(std::count_if(s.begin(), s.end(), [&](double v) { return v < x * 1e6; }));
+    EXPECT_NEAR(below / static_cast<double>(s.size()), 1 - std::exp(-std::numbers::ln2 * std::pow(x, 8.0)), 0.008)
+        << "at " << x << " sigma_t";
+  }
+  for (const double v : s) ASSERT_TRUE(std::isfinite(v) && v > 0);
+  EXPECT_EQ(sample_tensile_strengths(even, mat, 1), s);  // the same seed, the same strengths
+  const std::vector<double> other = sample_tensile_strengths(even, mat, 2);
+  std::size_t equal = 0;
+  for (std::size_t e = 0; e < s.size(); ++e) equal += s[e] == other[e];
+  EXPECT_EQ(equal, 0u);
+  // Uneven tets: (s / sigma_t)^m V_e / V_mean follows the law of a tet of mean volume (median 1),
+  // and larger tets are weaker.
+  const TetMesh jittered = make_box_mesh({.max = Vec3(2, 1, 1), .cells = {20, 10, 10}, .jitter = 0.3, .seed = 4});
+  const std::vector<double> j = sample_tensile_strengths(jittered, mat, 7);
+  double mean = 0;
+  for (Index e = 0; e < jittered.num_tets(); ++e) mean += signed_volume(jittered, e) / jittered.num_tets();
+  int below_median = 0;
+  for (Index e = 0; e < jittered.num_tets(); ++e)
+    below_median += std::pow(j[e] / 1e6, 8.0) * signed_volume(jittered, e) / mean < 1;
+  EXPECT_NEAR(below_median / static_cast<double>(jittered.num_tets()), 0.5, 0.02);
+  mat.tensile_strength = kInfinity;
+  EXPECT_TRUE(sample_tensile_strengths(even, mat, 1).empty());  // never cracks: nothing to scatter
 }
 
 TEST(StressHistory, SpikeVersusSustained) {

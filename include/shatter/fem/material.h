@@ -24,6 +24,10 @@ struct Material {
   double tensile_strength = 40e6;     ///< Pa (ultimate tensile strength); +inf = never cracks
   double yield_stress = kInfinity;    ///< Pa (von Mises); +inf = perfectly elastic (brittle)
   double fracture_toughness = 1.0e6;  ///< K_Ic, Pa*sqrt(m); +inf = not known / not used
+  /// Weibull modulus m of the tensile strength: 0 = every tet has tensile_strength; m > 0 = each
+  /// tet of a body draws its own from Weibull's weakest-link law (sample_tensile_strengths,
+  /// docs/fracture.md): the smaller m, the wider the scatter (glass and porcelain 5-15).
+  double weibull_modulus = 0;
 };
 
 /// Lamé constants, Pa.
@@ -36,7 +40,7 @@ struct Lame {
 Lame lame_parameters(const Material& m);
 
 /// Checks the fields: E > 0 and finite, nu in (-1, 0.5), density > 0 and finite, strengths > 0
-/// (may be +inf), no NaN. The error's field names the offending member ("youngs_modulus", ...).
+/// (may be +inf), Weibull modulus 0 or in [0.5, 1000], no NaN. The error's field names the offending member ("youngs_modulus", ...).
 Result<void> validate_material(const Material& m);
 
 /// A named preset ("glass", "porcelain", "steel", ...) or an alias of one ("china", "aluminum", ...).

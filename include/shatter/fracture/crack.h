@@ -3,6 +3,7 @@
 // less instantaneous criterion.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "shatter/core/types.h"
@@ -58,6 +59,15 @@ struct CrackPlan {
 /// Derived brittleness k (see CrackOptions::brittleness) for a body of size L (m).
 double material_brittleness(const Material& material, double body_size);
 
+/// Per-tet tensile strengths scattered by Weibull's weakest-link law (docs/fracture.md): tet e of
+/// volume V_e holds a tension sigma with probability exp(-ln 2 (V_e / V_mean) (sigma / sigma_t)^m),
+/// with sigma_t the material's tensile_strength, m its weibull_modulus and V_mean the mean tet
+/// volume of `mesh`. A tet of mean volume has median strength sigma_t; a larger tet is weaker, and a
+/// finer mesh of the same body holds more weak tets (the weakest-link size effect at the tet scale).
+/// Drawn in tet order from `seed` by our own generator (the same numbers on every platform). Empty
+/// (every tet has sigma_t) when m is 0 or sigma_t is +inf. Pa, #tets.
+std::vector<double> sample_tensile_strengths(const TetMesh& mesh, const Material& material, std::uint64_t seed);
+
 /// r_frac rule (see CrackOptions).
 double crack_radius(double stress, double strength, double brittleness, double r0, double r_min);
 
@@ -69,8 +79,12 @@ std::vector<Index> crack_region(const TetMesh& mesh, const NodeTets& incidence, 
 /// Plan up to max_cracks cracks: origins are tets whose largest principal stress exceeds the
 /// tensile strength, by decreasing stress (ties: lower tet index), each outside earlier regions.
 /// `ductile_origins` (tets over the maximum plastic strain) come first, with radius r_min.
+/// `tet_strength` gives each tet its own tensile strength (Pa, #tets; empty: the material's): a tet
+/// cracks when its stress exceeds its strength, origins are taken by decreasing stress over strength,
+/// and the crack radius follows the origin's own excess.
 std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStress>& stress, const Material& material,
-                                   const CrackOptions& options = {}, const std::vector<Index>& ductile_origins = {});
+                                   const CrackOptions& options = {}, const std::vector<Index>& ductile_origins = {},
+                                   const std::vector<double>& tet_strength = {});
 
 /// Exponentially time-averaged stress per tet: sigma_avg += (1 - exp(-dt / tau)) (sigma - sigma_avg).
 /// A stress must persist for about tau to count fully, so a one-step spike does not crack a body

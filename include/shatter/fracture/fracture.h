@@ -22,6 +22,9 @@ struct FractureOptions {
   PlasticityOptions plasticity;  ///< plastic update
   /// Accumulated plastic strain per tet of the rest mesh from earlier events (empty: zeros).
   std::vector<double> plastic_strain;
+  /// Tensile strength per tet of the rest mesh, Pa (empty: the material's; see
+  /// sample_tensile_strengths).
+  std::vector<double> tensile_strength;
 };
 
 /// One crack: its plan (origin, normal, radius, region in the mesh it was planned on) and what the

@@ -52,8 +52,10 @@ struct RigidState {
 
 /// The changing data of one body.
 struct BodyState {
-  RigidState rigid;                             ///< pose and velocities
-  std::vector<double> plastic_strain;           ///< accumulated equivalent plastic strain (#tets)
+  RigidState rigid;                    ///< pose and velocities
+  std::vector<double> plastic_strain;  ///< accumulated equivalent plastic strain (#tets)
+  /// Tensile strength per tet, Pa (#tets; empty: the material's), e.g. sample_tensile_strengths.
+  std::vector<double> tensile_strength;
   std::optional<StressHistory> stress_history;  ///< time-averaged stress (#tets), when used
   /// Pattern and factorization kept between impacts (a cache, shared by copies of the state;
   /// make_body_state creates it, and an impact makes one when it is null).

@@ -106,10 +106,11 @@ struct ImpactSettings {
 /// A body that an impact made: the only child of a dented or cracked but whole body, or one
 /// fragment of a broken one.
 struct ImpactChild {
-  std::shared_ptr<BodyModel> model;    ///< body frame centred on the child's centre of mass
-  RigidState rigid;                    ///< pose (the parent's orientation) and eq. 22 velocities
-  std::vector<double> plastic_strain;  ///< per child tet
-  std::vector<Index> parent_tet;       ///< the parent's tet each child tet lies in (#tets)
+  std::shared_ptr<BodyModel> model;      ///< body frame centred on the child's centre of mass
+  RigidState rigid;                      ///< pose (the parent's orientation) and eq. 22 velocities
+  std::vector<double> plastic_strain;    ///< per child tet
+  std::vector<double> tensile_strength;  ///< per child tet, Pa (empty when the parent's was)
+  std::vector<Index> parent_tet;         ///< the parent's tet each child tet lies in (#tets)
 };
 
 /// What analyze_impact found and did.

@@ -123,6 +123,10 @@ struct WorldSettings {
   /// Budget of the world: once it holds this many bodies (removed ones included, as ids
   /// are never reused), impacts still dent bodies but no longer crack them.
   Index max_bodies = 4096;
+  /// Seed of the world's random draws: the per-tet tensile strengths of bodies whose material has a
+  /// Weibull modulus (sample_tensile_strengths), drawn for the n-th body added from seed and n. The
+  /// same seed gives the same world; another seed, other flaws and other cracks.
+  std::uint64_t seed = 0;
 };
 
 /// One impact analysis of one body (a row of StepEvents::impacts).
@@ -288,6 +292,10 @@ class World {
   [[nodiscard]] BodyId parent(BodyId id) const;
   /// Accumulated plastic strain per tet of the body's current model (empty for planes and hulls).
   [[nodiscard]] std::span<const double> plastic_strain(BodyId id) const { return body(id).plastic_strain; }
+  /// Tensile strength per tet of the body's current model, Pa: drawn when the body was added, for a
+  /// material with a Weibull modulus (WorldSettings::seed), and carried into fragments; empty when
+  /// every tet has the material's.
+  [[nodiscard]] std::span<const double> tensile_strength(BodyId id) const { return body(id).tensile_strength; }
   /// Signed display stress per tet of the body's current model under its last impact or tool load
   /// (Pa; tension positive, compression negative: the paper's Fig. 7), carried into fragments;
   /// empty until the body is first analysed. For display only: it is not part of the state hash.
@@ -365,6 +373,7 @@ class World {
     std::uint32_t generation = 0;
     std::shared_ptr<const ImpactSettings> impact;
     std::vector<double> plastic_strain;    ///< per tet of model
+    std::vector<double> tensile_strength;  ///< per tet of model, Pa (empty: the material's)
     std::vector<double> display_stress;    ///< per tet of model under the last load, Pa (display only)
     std::vector<double> principal_stress;  ///< per tet under the last load, Pa (display only)
     std::shared_ptr<StaticSolver> solver;  ///< kept between impacts

@@ -74,6 +74,11 @@ Result<void> validate_material(const Material& m) {
   if (!(m.fracture_toughness > 0))
     return field_error("fracture_toughness", who + ": fracture toughness must be > 0 Pa*sqrt(m) (inf: not used), got " +
                                                  format_number(m.fracture_toughness));
+  if (!(m.weibull_modulus == 0 || (m.weibull_modulus >= 0.5 && m.weibull_modulus <= 1000)))
+    return field_error("weibull_modulus", who +
+                                              ": Weibull modulus must be 0 (one strength for every tet) or in "
+                                              "[0.5, 1000], got " +
+                                              format_number(m.weibull_modulus));
   return {};
 }
 

@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "shatter/core/assert.h"
+#include "shatter/core/random.h"
 #include "shatter/mesh/topology.h"
 
 namespace shatter {
@@ -30,6 +31,26 @@ double material_brittleness(const Material& material, double body_size) {
   return std::clamp(beta, 0.5, 20.0);
 }
 
+std::vector<double> sample_tensile_strengths(const TetMesh& mesh, const Material& material, std::uint64_t seed) {
+  std::vector<double> out;
+  const double m = material.weibull_modulus;
+  if (m == 0 || !std::isfinite(material.tensile_strength) || mesh.tets.empty()) return out;
+  std::vector<double> volume(mesh.tets.size());
+  double sum = 0;
+  for (Index e = 0; e < mesh.num_tets(); ++e) sum += volume[e] = std::abs(signed_volume(mesh, e));
+  const double mean = sum / static_cast<double>(mesh.tets.size());
+  Random rng(seed);
+  out.resize(mesh.tets.size());
+  for (std::size_t e = 0; e < out.size(); ++e) {
+    // u in (0, 1) from the top 53 bits (never 0 or 1); the inverse of the survival law
+    // exp(-ln 2 (V_e / V_mean) (s / sigma_t)^m) = 1 - u.
+    const double u = (static_cast<double>(rng.next_u64() >> 11) + 0.5) * 0x1.0p-53;
+    const double weakness = volume[e] > 0 ? mean / volume[e] : 1.0;
+    out[e] = material.tensile_strength * std::pow(weakness * -std::log1p(-u) / std::numbers::ln2, 1.0 / m);
+  }
+  return out;
+}
+
 double crack_radius(double stress, double strength, double brittleness, double r0, double r_min) {
   const double excess = std::max(0.0, stress / strength - 1.0);
   return std::max(r_min, r0 * std::min(1.0, brittleness * excess));
@@ -53,8 +74,10 @@ std::vector<Index> crack_region(const TetMesh& mesh, const NodeTets& incidence, 
 }
 
 std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStress>& stress, const Material& material,
-                                   const CrackOptions& options, const std::vector<Index>& ductile_origins) {
+                                   const CrackOptions& options, const std::vector<Index>& ductile_origins,
+                                   const std::vector<double>& tet_strength) {
   SHATTER_CHECK(stress.size() == mesh.tets.size());
+  SHATTER_CHECK(tet_strength.empty() || tet_strength.size() == mesh.tets.size());
   std::vector<CrackPlan> plans;
   if (options.max_cracks <= 0 || mesh.tets.empty()) return plans;
   const double strength = material.tensile_strength;
@@ -72,12 +95,16 @@ std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStr
     if (options.return_to_yield && s.von_mises > yield) return s.principal[0] * (yield / s.von_mises);
     return s.principal[0];
   };
+  const bool per_tet = !tet_strength.empty();
+  auto strength_of = [&](Index e) { return per_tet ? tet_strength[e] : strength; };
   std::vector<Index> over;
-  if (std::isfinite(strength))
+  if (per_tet || std::isfinite(strength))
     for (Index e = 0; e < mesh.num_tets(); ++e)
-      if (tension(e) > strength) over.push_back(e);
+      if (tension(e) > strength_of(e)) over.push_back(e);
+  // By decreasing stress over strength (with one strength: by decreasing stress, the same order).
+  auto rank = [&](Index e) { return per_tet ? tension(e) / tet_strength[e] : tension(e); };
   std::sort(over.begin(), over.end(), [&](Index a, Index b) {
-    const double sa = tension(a), sb = tension(b);
+    const double sa = rank(a), sb = rank(b);
     return sa != sb ? sa > sb : a < b;
   });
   if (over.empty() && ductile_origins.empty()) return plans;
@@ -88,7 +115,7 @@ std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStr
     if (static_cast<int>(plans.size()) >= options.max_cracks || (taken[e] && !options.branch)) return;
     const Vec3 c = centroid(mesh, e);
     const double r_min = options.min_radius_edges * longest_edge(mesh, e);
-    const double r = ductile ? r_min : crack_radius(tension(e), strength, k, r0, r_min);
+    const double r = ductile ? r_min : crack_radius(tension(e), strength_of(e), k, r0, r_min);
     for (const CrackPlan& p : plans) {
       const double keep_off = options.branch ? options.min_radius_edges * longest_edge(mesh, p.origin_tet) : p.radius;
       if ((c - p.origin).norm() <= options.separation * keep_off) return;

@@ -237,13 +237,21 @@ Result<void> check_state(const BodyModel& model, const BodyState& state, const c
   if (!state.plastic_strain.empty() && state.plastic_strain.size() != static_cast<std::size_t>(nt))
     return make_error(std::string(what) + ": the state has " + std::to_string(state.plastic_strain.size()) +
                       " plastic strains for " + std::to_string(nt) + " tets");
+  if (!state.tensile_strength.empty() && state.tensile_strength.size() != static_cast<std::size_t>(nt))
+    return make_error(std::string(what) + ": the state has " + std::to_string(state.tensile_strength.size()) +
+                      " tensile strengths for " + std::to_string(nt) + " tets");
+  for (const double s : state.tensile_strength)
+    if (!(s > 0))
+      return make_error(std::string(what) + ": a tet's tensile strength is " + format_number(s) + " Pa (expected > 0)");
   return {};
 }
 
 // The children of a cut body (fr: its fracture or slice), with the debris rules of `settings`:
-// exact mass properties, eq. 22 motion, crack faces and rest coordinates for solid textures.
-void make_children(const BodyModel& model, const RigidState& rigid, const FractureResult& fr, double body_radius,
-                   const ImpactSettings& settings, ImpactResult& result) {
+// exact mass properties, eq. 22 motion, crack faces and rest coordinates for solid textures; each
+// child tet keeps the tensile strength of its parent tet (`strength`, #parent tets or empty).
+void make_children(const BodyModel& model, const RigidState& rigid, const FractureResult& fr,
+                   const std::vector<double>& strength, double body_radius, const ImpactSettings& settings,
+                   ImpactResult& result) {
   const Material& material = model.fem.material;
   // The density follows the rest volume so that the parent's mass is kept exactly
   // (plasticity may have changed the volume; a cut never does).
@@ -293,6 +301,8 @@ void make_children(const BodyModel& model, const RigidState& rigid, const Fractu
       child.parent_tet[e] = fr.tet_parent[f.tet_map[e]];
       child.plastic_strain[e] = fr.plastic_strain[f.tet_map[e]];
     }
+    if (!strength.empty())
+      for (const Index e : child.parent_tet) child.tensile_strength.push_back(strength[static_cast<std::size_t>(e)]);
     m->crack_face = child_crack_faces(model, fr.plastic.rest_positions, m->surface, c, child.parent_tet, tolerance);
     // Eq. 22: the child keeps the velocity of the parent's material at its centre.
     child.rigid.orientation = rigid.orientation;
@@ -356,7 +366,13 @@ Result<void> respond(const BodyModel& model, BodyState& state, const std::vector
     max_tension = std::max(max_tension, fo.crack.return_to_yield && s.von_mises > material.yield_stress
                                             ? s.principal[0] * (material.yield_stress / s.von_mises)
                                             : s.principal[0]);
-  const bool may_crack = fo.crack.max_cracks > 0 && max_tension > material.tensile_strength;
+  bool over_strength = max_tension > material.tensile_strength;
+  if (!state.tensile_strength.empty()) {
+    over_strength = false;
+    for (std::size_t e = 0; e < stress.size() && !over_strength; ++e)
+      over_strength = stress[e].principal[0] > state.tensile_strength[e];  // at least the criterion's tension
+  }
+  const bool may_crack = fo.crack.max_cracks > 0 && over_strength;
   const bool may_yield = fo.plasticity.enabled && result.max_von_mises > material.yield_stress;
   if (!may_crack && !may_yield) {
     result.fracture_ms = ms_since(t0);
@@ -364,6 +380,7 @@ Result<void> respond(const BodyModel& model, BodyState& state, const std::vector
   }
   FractureOptions options = fo;
   options.plastic_strain = result.plastic_strain;
+  options.tensile_strength = state.tensile_strength;
   FractureResult fr = fracture_with_stress(model.mesh, model.fem, x, std::move(stress), options);
   result.cracks = fr.events;
   result.dented = !fr.plastic.moved_nodes.empty();
@@ -379,6 +396,7 @@ Result<void> respond(const BodyModel& model, BodyState& state, const std::vector
       child.model = std::move(dented);
       child.rigid = moved.rigid;
       child.plastic_strain = fr.plastic.plastic_strain;
+      child.tensile_strength = state.tensile_strength;
       child.parent_tet.resize(static_cast<std::size_t>(nt));
       std::iota(child.parent_tet.begin(), child.parent_tet.end(), Index(0));
       result.children.push_back(std::move(child));
@@ -387,7 +405,7 @@ Result<void> respond(const BodyModel& model, BodyState& state, const std::vector
     return {};
   }
 
-  make_children(model, rigid, fr, body_radius, settings, result);
+  make_children(model, rigid, fr, state.tensile_strength, body_radius, settings, result);
   result.fracture_ms = ms_since(t0);
   return {};
 }
@@ -544,10 +562,8 @@ Result<ImpactResult> slice_body(const BodyModel& model, const BodyState& state, 
                                 const ImpactSettings& settings) {
   if (!point.allFinite() || !normal.allFinite() || !(normal.norm() > 0))
     return make_error("slice_body: the plane needs a finite point and a non-zero normal");
+  SHATTER_TRY(checked, check_state(model, state, "slice_body"));
   const Index nt = model.mesh.num_tets();
-  if (!state.plastic_strain.empty() && state.plastic_strain.size() != static_cast<std::size_t>(nt))
-    return make_error("slice_body: the state has " + std::to_string(state.plastic_strain.size()) +
-                      " plastic strains for " + std::to_string(nt) + " tets");
   const auto t0 = Clock::now();
   ImpactResult result;
   result.analysed = true;
@@ -585,7 +601,7 @@ Result<ImpactResult> slice_body(const BodyModel& model, const BodyState& state, 
   event.nodes_duplicated = cut.nodes_duplicated;
   event.faces_cut = cut.faces_cut;
   result.cracks.push_back(event);
-  make_children(model, state.rigid, fr, body_radius, settings, result);
+  make_children(model, state.rigid, fr, state.tensile_strength, body_radius, settings, result);
   result.fracture_ms = ms_since(t0);
   return result;
 }

@@ -392,6 +392,11 @@ Result<Scene> parse_scene(std::string_view text, const std::string& file, const 
       SHATTER_TRY(v, json_input::read_bool(*j, w.key("impacts")));
       scene.world.enable_impacts = *v;
     }
+    if (const Json* j = wr.get("seed")) {
+      SHATTER_TRY(v, json_input::read_integer(*j, w.key("seed")));
+      if (*v < 0) return w.key("seed").error("expected an integer >= 0");
+      scene.world.seed = static_cast<std::uint64_t>(*v);
+    }
     SHATTER_TRY(done, wr.finish());
   }
   if (const Json* j = r.get("duration")) {

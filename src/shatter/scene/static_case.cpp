@@ -328,6 +328,7 @@ Result<Material> read_material_json(const Json& value, const Where& where) {
       {"tensile_strength", &m.tensile_strength, false},
       {"yield_stress", &m.yield_stress, false},
       {"fracture_toughness", &m.fracture_toughness, false},
+      {"weibull_modulus", &m.weibull_modulus, false},
   };
   bool overridden = false;
   for (const Num& n : nums) {

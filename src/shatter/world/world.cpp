@@ -178,7 +178,13 @@ Result<BodyId> World::add_body(std::shared_ptr<const BodyModel> model, const Bod
     return make_error("add_body: a dynamic body needs a positive mass (check the material density)");
   auto shape = shared_tet_shape(model);
   if (!shape) return make_error("add_body: " + shape.error().message);
-  return body_id(add(def, std::move(*shape), std::move(model)));
+  const Index slot = add(def, std::move(*shape), std::move(model));
+  // The body's flaws: its own stream of the world's seed (SplitMix64's increment apart per slot).
+  Body& b = bodies_[slot];
+  b.tensile_strength =
+      sample_tensile_strengths(b.model->mesh, b.model->fem.material,
+                               settings_.seed + 0x9e3779b97f4a7c15ULL * static_cast<std::uint64_t>(slot + 1));
+  return body_id(slot);
 }
 
 void World::finish_tet_shape(Shape& shape, const BodyModel& model) const {
@@ -868,6 +874,7 @@ BodyState World::impact_state(const Body& body) {
   BodyState state;
   state.rigid = body.rigid;
   state.plastic_strain = body.plastic_strain;
+  state.tensile_strength = body.tensile_strength;
   state.solver = body.solver;
   return state;
 }
@@ -936,6 +943,7 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
       body.inertia = rigid_inertia(child.model->mass);
       body.rigid = child.rigid;
       body.plastic_strain = std::move(child.plastic_strain);
+      body.tensile_strength = std::move(child.tensile_strength);
       body.display_stress = child_stress(child, r.display_stress);
       body.principal_stress = child_stress(child, r.principal_stress);
     } else {  // keep the body as it was: nothing was removed
@@ -974,6 +982,7 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
     b.parent = id;
     b.root_mass = parent.root_mass;
     b.plastic_strain = std::move(child.plastic_strain);
+    b.tensile_strength = std::move(child.tensile_strength);
     b.display_stress = child_stress(child, r.display_stress);
     b.principal_stress = child_stress(child, r.principal_stress);
     born.push_back(cid);
@@ -1179,6 +1188,10 @@ std::uint64_t World::state_hash() const {
     h.add(b.parent);
     h.add(static_cast<Index>(b.plastic_strain.size()));
     for (const double e : b.plastic_strain) h.add(e);
+    if (!b.tensile_strength.empty()) {  // (bodies without drawn strengths hash as before)
+      h.add(static_cast<Index>(b.tensile_strength.size()));
+      for (const double s : b.tensile_strength) h.add(s);
+    }
   }
   for (const Contact& c : contacts_) {
     h.add(std::array<Index, 4>{c.body_a, c.body_b, c.piece_a, c.piece_b});
