@@ -56,8 +56,15 @@ struct ContactPoint {
   Vec3 local_anchor_b = Vec3::Zero();  ///< the point in B's frame
   double separation = 0;               ///< along the normal at the start of the step, m (< 0 overlap)
   double normal_mass = 0;              ///< effective mass along the normal, kg
-  double normal_impulse = 0;           ///< accumulated (warm start), N s
-  double lever_arm = 0;                ///< distance to the friction centre, m (twist bound)
+  // The normal row's Jacobian and response, fixed over the step (the anchors and the world inverse
+  // inertias are): v_n = n . (v_B - v_A) + rn_b . w_B - rn_a . w_A, and an impulse l n turns
+  // A by -l ang_a and B by +l ang_b.
+  Vec3 rn_a = Vec3::Zero();   ///< anchor_a x normal, m
+  Vec3 rn_b = Vec3::Zero();   ///< anchor_b x normal, m
+  Vec3 ang_a = Vec3::Zero();  ///< I_A^-1 rn_a, 1/(kg m)
+  Vec3 ang_b = Vec3::Zero();  ///< I_B^-1 rn_b, 1/(kg m)
+  double normal_impulse = 0;  ///< accumulated (warm start), N s
+  double lever_arm = 0;       ///< distance to the friction centre, m (twist bound)
   /// Fastest approach (minus the relative normal velocity, m/s, > 0 approaching) met at the start
   /// of the step or before any biased pass of its substeps: the impact speed.
   double approach_speed = 0;
@@ -80,10 +87,16 @@ struct ContactConstraint {
   std::array<ContactPoint, 4> points{};
   int count = 0;
   // Friction at the friction centre (the points' mean, gaps weighted down).
-  Vec3 centre_a = Vec3::Zero();                                ///< world offset from A's centre of mass, m
-  Vec3 centre_b = Vec3::Zero();                                ///< the same for B
-  Eigen::Matrix2d tangent_mass = Eigen::Matrix2d::Zero();      ///< inverse of the 2x2 tangent K, kg
-  double twist_mass = 0;                                       ///< about the normal, kg m^2
+  Vec3 centre_a = Vec3::Zero();                            ///< world offset from A's centre of mass, m
+  Vec3 centre_b = Vec3::Zero();                            ///< the same for B
+  Eigen::Matrix2d tangent_mass = Eigen::Matrix2d::Zero();  ///< inverse of the 2x2 tangent K, kg
+  std::array<Vec3, 2> rt_a{};    ///< centre_a x tangent k, m (the tangent rows' Jacobians, as rn_a)
+  std::array<Vec3, 2> rt_b{};    ///< centre_b x tangent k, m
+  std::array<Vec3, 2> ang_ta{};  ///< I_A^-1 rt_a[k]
+  std::array<Vec3, 2> ang_tb{};  ///< I_B^-1 rt_b[k]
+  Vec3 twist_a = Vec3::Zero();   ///< I_A^-1 normal (the twist row's response)
+  Vec3 twist_b = Vec3::Zero();   ///< I_B^-1 normal
+  double twist_mass = 0;         ///< about the normal, kg m^2
   Eigen::Vector2d friction_impulse = Eigen::Vector2d::Zero();  ///< accumulated, along the tangents, N s
   double twist_impulse = 0;                                    ///< accumulated, about the normal, N m s
   /// Friction applied on B during the step, over all substeps and passes, world, N s.

@@ -11,42 +11,44 @@ namespace {
 // Velocity of the material point at offset r of body b, m/s.
 Vec3 point_velocity(const SolverBody& b, const Vec3& r) { return b.linear_velocity + b.angular_velocity.cross(r); }
 
-// Apply impulse `j` (on B; -j on A) at offsets ra, rb.
-void apply_impulse(SolverBody& a, SolverBody& b, const Vec3& ra, const Vec3& rb, const Vec3& j) {
-  a.linear_velocity -= a.inverse_mass * j;
-  a.angular_velocity -= a.inverse_inertia * ra.cross(j);
-  b.linear_velocity += b.inverse_mass * j;
-  b.angular_velocity += b.inverse_inertia * rb.cross(j);
+// Apply impulse l along unit direction d (on B; -l d on A) whose angular responses are ang_a and
+// ang_b (I^-1 (r x d) of each body).
+void apply_row(SolverBody& a, SolverBody& b, const Vec3& d, const Vec3& ang_a, const Vec3& ang_b, double l) {
+  a.linear_velocity -= (a.inverse_mass * l) * d;
+  a.angular_velocity -= l * ang_a;
+  b.linear_velocity += (b.inverse_mass * l) * d;
+  b.angular_velocity += l * ang_b;
 }
 
-// Apply angular impulse `t` about the world axis (on B; -t on A).
-void apply_angular_impulse(SolverBody& a, SolverBody& b, const Vec3& t) {
-  a.angular_velocity -= a.inverse_inertia * t;
-  b.angular_velocity += b.inverse_inertia * t;
-}
-
-// 1 / (J M^-1 J^T) along direction d, or 0 when neither body can respond.
-double effective_mass(const SolverBody& a, const SolverBody& b, const Vec3& ra, const Vec3& rb, const Vec3& d) {
-  const Vec3 rna = ra.cross(d);
-  const Vec3 rnb = rb.cross(d);
-  const double k =
-      a.inverse_mass + b.inverse_mass + rna.dot(a.inverse_inertia * rna) + rnb.dot(b.inverse_inertia * rnb);
-  return k > 0 ? 1.0 / k : 0.0;
+// Relative velocity along a row: d . (v_B - v_A) + r_b . w_B - r_a . w_A (r = anchor x d).
+double row_velocity(const SolverBody& a, const SolverBody& b, const Vec3& d, const Vec3& r_a, const Vec3& r_b) {
+  return d.dot(b.linear_velocity - a.linear_velocity) + r_b.dot(b.angular_velocity) - r_a.dot(a.angular_velocity);
 }
 
 // One normal row: the accumulated impulse moves by -m (scale vn + bias) - impulse_scale * lambda,
 // clamped at 0 (Box2D's soft contact). Returns the impulse applied.
 double solve_normal(ContactConstraint& c, ContactPoint& p, SolverBody& a, SolverBody& b, double bias, double mass_scale,
                     double impulse_scale) {
-  const double vn = (point_velocity(b, p.anchor_b) - point_velocity(a, p.anchor_a)).dot(c.normal);
+  const double vn = row_velocity(a, b, c.normal, p.rn_a, p.rn_b);
   const double delta = -p.normal_mass * (mass_scale * vn + bias) - impulse_scale * p.normal_impulse;
   const double next = std::max(p.normal_impulse + delta, 0.0);
   const double applied = next - p.normal_impulse;
   p.normal_impulse = next;
   p.max_normal_impulse = std::max(p.max_normal_impulse, next);
   p.total_normal_impulse += applied;
-  apply_impulse(a, b, p.anchor_a, p.anchor_b, applied * c.normal);
+  apply_row(a, b, c.normal, p.ang_a, p.ang_b, applied);
   return applied;
+}
+
+// Apply the friction impulse f (x along tangent 0, y along tangent 1) at the friction centre.
+void apply_friction(const ContactConstraint& c, SolverBody& a, SolverBody& b, const Eigen::Vector2d& f) {
+  apply_row(a, b, c.tangents[0], c.ang_ta[0], c.ang_tb[0], f.x());
+  apply_row(a, b, c.tangents[1], c.ang_ta[1], c.ang_tb[1], f.y());
+}
+// Apply the twist impulse t about the normal.
+void apply_twist(const ContactConstraint& c, SolverBody& a, SolverBody& b, double t) {
+  a.angular_velocity -= t * c.twist_a;
+  b.angular_velocity += t * c.twist_b;
 }
 
 }  // namespace
@@ -77,7 +79,12 @@ void prepare_contact(ContactConstraint& c, std::span<const SolverBody> bodies, d
   double weight_sum = 0;
   for (int i = 0; i < c.count; ++i) {
     ContactPoint& p = c.points[i];
-    p.normal_mass = effective_mass(a, b, p.anchor_a, p.anchor_b, c.normal);
+    p.rn_a = p.anchor_a.cross(c.normal);
+    p.rn_b = p.anchor_b.cross(c.normal);
+    p.ang_a = a.inverse_inertia * p.rn_a;
+    p.ang_b = b.inverse_inertia * p.rn_b;
+    const double k = a.inverse_mass + b.inverse_mass + p.rn_a.dot(p.ang_a) + p.rn_b.dot(p.ang_b);
+    p.normal_mass = k > 0 ? 1.0 / k : 0.0;
     const Vec3 dv = point_velocity(b, p.anchor_b) - point_velocity(a, p.anchor_a);
     p.approach_speed = -dv.dot(c.normal);
     p.max_normal_impulse = 0;
@@ -92,19 +99,22 @@ void prepare_contact(ContactConstraint& c, std::span<const SolverBody> bodies, d
   c.centre_b = centre_b / weight_sum;
   for (int i = 0; i < c.count; ++i) c.points[i].lever_arm = (c.points[i].anchor_a - c.centre_a).norm();
   // Coupled tangent mass at the centre: K_ij = (1/mA + 1/mB) d_ij + (rA x t_i) IA^-1 (rA x t_j) + (B).
-  std::array<Vec3, 2> ta, tb;
   for (int k = 0; k < 2; ++k) {
-    ta[k] = c.centre_a.cross(c.tangents[k]);
-    tb[k] = c.centre_b.cross(c.tangents[k]);
+    c.rt_a[k] = c.centre_a.cross(c.tangents[k]);
+    c.rt_b[k] = c.centre_b.cross(c.tangents[k]);
+    c.ang_ta[k] = a.inverse_inertia * c.rt_a[k];
+    c.ang_tb[k] = b.inverse_inertia * c.rt_b[k];
   }
   Eigen::Matrix2d kt;
   for (int i = 0; i < 2; ++i)
     for (int j = 0; j < 2; ++j)
-      kt(i, j) = (i == j ? a.inverse_mass + b.inverse_mass : 0.0) + ta[i].dot(a.inverse_inertia * ta[j]) +
-                 tb[i].dot(b.inverse_inertia * tb[j]);
+      kt(i, j) =
+          (i == j ? a.inverse_mass + b.inverse_mass : 0.0) + c.rt_a[i].dot(c.ang_ta[j]) + c.rt_b[i].dot(c.ang_tb[j]);
   const double det = kt.determinant();
   c.tangent_mass = det > 0 ? Eigen::Matrix2d(kt.inverse()) : Eigen::Matrix2d::Zero();
-  const double kw = c.normal.dot((a.inverse_inertia + b.inverse_inertia) * c.normal);
+  c.twist_a = a.inverse_inertia * c.normal;
+  c.twist_b = b.inverse_inertia * c.normal;
+  const double kw = c.normal.dot(c.twist_a) + c.normal.dot(c.twist_b);
   c.twist_mass = kw > 0 ? 1.0 / kw : 0.0;
   c.total_friction_impulse.setZero();
 }
@@ -114,13 +124,12 @@ void warm_start_contact(ContactConstraint& c, std::span<SolverBody> bodies) {
   SolverBody& b = bodies[c.body_b];
   for (int i = 0; i < c.count; ++i) {
     ContactPoint& p = c.points[i];
-    apply_impulse(a, b, p.anchor_a, p.anchor_b, p.normal_impulse * c.normal);
+    apply_row(a, b, c.normal, p.ang_a, p.ang_b, p.normal_impulse);
     p.total_normal_impulse += p.normal_impulse;
   }
-  const Vec3 f = c.friction_impulse.x() * c.tangents[0] + c.friction_impulse.y() * c.tangents[1];
-  apply_impulse(a, b, c.centre_a, c.centre_b, f);
-  apply_angular_impulse(a, b, c.twist_impulse * c.normal);
-  c.total_friction_impulse += f;
+  apply_friction(c, a, b, c.friction_impulse);
+  apply_twist(c, a, b, c.twist_impulse);
+  c.total_friction_impulse += c.friction_impulse.x() * c.tangents[0] + c.friction_impulse.y() * c.tangents[1];
 }
 
 double current_separation(const ContactConstraint& c, const ContactPoint& p, std::span<const SolverBody> bodies) {
@@ -143,8 +152,7 @@ void solve_contact(ContactConstraint& c, std::span<SolverBody> bodies, double in
     if (use_bias) {
       // The fastest approach met before a solve in this step: the impact speed, which the step's
       // start velocity underestimates by up to g dt when the impact falls late in the step.
-      const double vn = (point_velocity(b, p.anchor_b) - point_velocity(a, p.anchor_a)).dot(c.normal);
-      p.approach_speed = std::max(p.approach_speed, -vn);
+      p.approach_speed = std::max(p.approach_speed, -row_velocity(a, b, c.normal, p.rn_a, p.rn_b));
     }
     if (s > 0) {
       solve_normal(c, p, a, b, s * inverse_h, 1, 0);  // speculative: close the gap within the substep, no more
@@ -163,22 +171,21 @@ void solve_contact(ContactConstraint& c, std::span<SolverBody> bodies, double in
     const double spin = c.normal.dot(b.angular_velocity - a.angular_velocity);
     const double limit = c.friction * twist_limit;
     const double next = std::clamp(c.twist_impulse - c.twist_mass * spin, -limit, limit);
-    apply_angular_impulse(a, b, (next - c.twist_impulse) * c.normal);
+    apply_twist(c, a, b, next - c.twist_impulse);
     c.twist_impulse = next;
   }
   // Coulomb friction at the centre, the tangent impulse clamped to the friction disc.
   {
-    const Vec3 dv = point_velocity(b, c.centre_b) - point_velocity(a, c.centre_a);
-    const Eigen::Vector2d vt(dv.dot(c.tangents[0]), dv.dot(c.tangents[1]));
+    const Eigen::Vector2d vt(row_velocity(a, b, c.tangents[0], c.rt_a[0], c.rt_b[0]),
+                             row_velocity(a, b, c.tangents[1], c.rt_a[1], c.rt_b[1]));
     Eigen::Vector2d next = c.friction_impulse - c.tangent_mass * vt;
     const double limit = c.friction * total_normal;
     const double norm = next.norm();
     if (norm > limit) next *= norm > 0 ? limit / norm : 0.0;
     const Eigen::Vector2d delta = next - c.friction_impulse;
     c.friction_impulse = next;
-    const Vec3 applied = delta.x() * c.tangents[0] + delta.y() * c.tangents[1];
-    c.total_friction_impulse += applied;
-    apply_impulse(a, b, c.centre_a, c.centre_b, applied);
+    c.total_friction_impulse += delta.x() * c.tangents[0] + delta.y() * c.tangents[1];
+    apply_friction(c, a, b, delta);
   }
 }
 
