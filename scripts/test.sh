@@ -8,7 +8,8 @@
 #      ThreadSanitizer (clang-19), no suppressions; shatter's worker pool synchronises through
 #      the standard library's mutexes and atomics, which TSan sees.
 #      Left out there: CmdMesh.* (needs the CLI, not built for this stage);
-#   4. every libFuzzer target for a short time (SHATTER_FUZZ_SECONDS, default 20) from its corpus;
+#   4. every libFuzzer target for a short time (SHATTER_FUZZ_SECONDS, default 10) from its corpus
+#      (long runs: scripts/soak.sh);
 #   5. find_package(shatter) from a separate project against an installed copy.
 # Set SHATTER_QUICK=1 to run step 1 only.
 set -euo pipefail
@@ -41,7 +42,7 @@ cmake --build --preset tsan -j "$jobs"
 ctest --preset tsan -j "$jobs"
 
 echo "== fuzzing"
-scripts/fuzz.sh "${SHATTER_FUZZ_SECONDS:-20}"
+scripts/fuzz.sh "${SHATTER_FUZZ_SECONDS:-10}"
 
 echo "== find_package(shatter) from another project"
 scripts/check_install.sh

@@ -23,6 +23,8 @@
 #include <tuple>
 #include <utility>
 
+#include "shatter/core/assert.h"
+
 namespace shatter {
 namespace {
 
@@ -58,7 +60,14 @@ int edge_index(const std::array<Index, 3>& v, Index from, Index to) {
 // counter-clockwise triangle (a, b, c). A floating-point filter first (error bound after Shewchuk
 // 1997), then exact expansion arithmetic for the near-degenerate cases. Exact visibility keeps the
 // triangle hull exactly convex whatever the round-off in its face planes.
-using Expansion = std::vector<double>;  // non-overlapping components, increasing magnitude
+// An expansion of at most N components (non-overlapping, increasing magnitude), on the stack: the
+// exact path runs often (boxes and structured meshes have exactly coplanar points), and heap
+// expansions made it cost more than the hull itself.
+template <int N>
+struct Expansion {
+  std::array<double, N> c{};
+  int n = 0;
+};
 
 void two_sum(double a, double b, double& sum, double& err) {
   sum = a + b;
@@ -66,43 +75,53 @@ void two_sum(double a, double b, double& sum, double& err) {
   err = (a - av) + (b - bv);
 }
 
-Expansion grow(const Expansion& e, double b) {  // Shewchuk's Grow-Expansion
-  Expansion h;
-  h.reserve(e.size() + 1);
+// e += b (Shewchuk's Grow-Expansion), in place: component i is read before slot k <= i is written.
+template <int N>
+void grow(Expansion<N>& e, double b) {
+  SHATTER_CHECK(e.n < N);
   double q = b;
-  for (double x : e) {
+  int k = 0;
+  for (int i = 0; i < e.n; ++i) {
     double err;
-    two_sum(q, x, q, err);
-    if (err != 0) h.push_back(err);
+    two_sum(q, e.c[i], q, err);
+    if (err != 0) e.c[k++] = err;
   }
-  h.push_back(q);
-  return h;
+  e.c[k++] = q;
+  e.n = k;
 }
 
-Expansion add(Expansion e, const Expansion& f) {
-  for (double x : f) e = grow(e, x);
-  return e;
+// e + sign f, component by component of f (sign +-1: exact).
+template <int N, int A, int B>
+Expansion<N> sum(const Expansion<A>& e, const Expansion<B>& f, double sign = 1) {
+  static_assert(N >= A + B);
+  Expansion<N> r;
+  std::copy(e.c.begin(), e.c.begin() + e.n, r.c.begin());
+  r.n = e.n;
+  for (int i = 0; i < f.n; ++i) grow(r, sign * f.c[i]);
+  return r;
 }
 
-Expansion mul(const Expansion& e, const Expansion& f) {
-  Expansion r;
-  for (double y : f)
-    for (double x : e) {
+template <int N, int A, int B>
+Expansion<N> product(const Expansion<A>& e, const Expansion<B>& f) {
+  static_assert(N >= 2 * A * B);
+  Expansion<N> r;
+  for (int j = 0; j < f.n; ++j)
+    for (int i = 0; i < e.n; ++i) {
+      const double x = e.c[i], y = f.c[j];
       const double p = x * y;
-      r = grow(grow(r, std::fma(x, y, -p)), p);  // x y = p + fma's remainder, exactly
+      grow(r, std::fma(x, y, -p));  // x y = p + fma's remainder, exactly
+      grow(r, p);
     }
   return r;
 }
 
-Expansion minus(Expansion e) {
-  for (double& x : e) x = -x;
-  return e;
-}
-
-Expansion exact_diff(double a, double b) {
+Expansion<2> exact_diff(double a, double b) {
+  Expansion<2> e;
   double d, err;
   two_sum(a, -b, d, err);
-  return err != 0 ? Expansion{err, d} : Expansion{d};
+  if (err != 0) e.c[e.n++] = err;
+  e.c[e.n++] = d;
+  return e;
 }
 
 int orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
@@ -114,15 +133,15 @@ int orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   const double bound = 1e-15 * permanent;  // > (7 + 56 eps) eps * permanent
   if (det > bound) return 1;
   if (det < -bound) return -1;
-  std::array<Expansion, 3> eu, ev, ew;
+  std::array<Expansion<2>, 3> eu, ev, ew;
   for (int k = 0; k < 3; ++k)
     eu[k] = exact_diff(b[k], a[k]), ev[k] = exact_diff(c[k], a[k]), ew[k] = exact_diff(d[k], a[k]);
-  const Expansion cx = add(mul(ev[1], ew[2]), minus(mul(ev[2], ew[1])));
-  const Expansion cy = add(mul(ev[2], ew[0]), minus(mul(ev[0], ew[2])));
-  const Expansion cz = add(mul(ev[0], ew[1]), minus(mul(ev[1], ew[0])));
-  const Expansion e = add(add(mul(eu[0], cx), mul(eu[1], cy)), mul(eu[2], cz));
-  for (auto it = e.rbegin(); it != e.rend(); ++it)  // NOLINT(modernize-loop-convert): most significant first
-    if (*it != 0) return *it > 0 ? 1 : -1;
+  // (v x w) by components, then u . (v x w): at most 16 and 3 x 64 components.
+  const auto cross = [&](int i, int j) { return sum<16>(product<8>(ev[i], ew[j]), product<8>(ev[j], ew[i]), -1); };
+  const Expansion<16> cx = cross(1, 2), cy = cross(2, 0), cz = cross(0, 1);
+  const Expansion<192> e = sum<192>(sum<128>(product<64>(eu[0], cx), product<64>(eu[1], cy)), product<64>(eu[2], cz));
+  for (int i = e.n - 1; i >= 0; --i)  // most significant first
+    if (e.c[i] != 0) return e.c[i] > 0 ? 1 : -1;
   return 0;
 }
 
