@@ -401,6 +401,29 @@ TEST(Impacts, TheSeedDrawsEachTetsStrength) {
   EXPECT_EQ(run(vase(), 1, 1).hash, run(vase(), 2, 1).hash);  // one strength: nothing to draw
 }
 
+// Two bodies of one model draw independent strengths: not the same numbers, nor the same numbers a
+// few tets apart (as streams started a fixed step apart in one generator's sequence would be).
+TEST(Impacts, BodiesDrawIndependentStrengths) {
+  Material scattered;
+  scattered.weibull_modulus = 8;
+  const auto model = asset_model("vase", scattered);
+  World w(WorldSettings{.seed = 5});
+  const BodyId a = w.add_body(model, {}).value();
+  const BodyId b = w.add_body(model, {.rigid = {.position = Vec3(1, 0, 0)}}).value();
+  const auto sa = w.tensile_strength(a), sb = w.tensile_strength(b);
+  ASSERT_EQ(sa.size(), model->mesh.tets.size());
+  ASSERT_EQ(sb.size(), sa.size());
+  for (std::size_t shift = 0; shift < 8; ++shift) {
+    std::size_t equal_ab = 0, equal_ba = 0;
+    for (std::size_t e = 0; e + shift < sa.size(); ++e) {
+      equal_ab += sa[e + shift] == sb[e];
+      equal_ba += sb[e + shift] == sa[e];
+    }
+    EXPECT_EQ(equal_ab, 0u) << "shift " << shift;
+    EXPECT_EQ(equal_ba, 0u) << "shift " << shift;
+  }
+}
+
 TEST(Impacts, StateHashSameOnAnyThreadCountAndThroughRestore) {
   const std::uint64_t one = vase_drop_hash(1, -1);
   EXPECT_EQ(vase_drop_hash(2, -1), one);

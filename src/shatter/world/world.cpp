@@ -2,6 +2,7 @@
 #include "shatter/world/world.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -179,11 +180,13 @@ Result<BodyId> World::add_body(std::shared_ptr<const BodyModel> model, const Bod
   auto shape = shared_tet_shape(model);
   if (!shape) return make_error("add_body: " + shape.error().message);
   const Index slot = add(def, std::move(*shape), std::move(model));
-  // The body's flaws: its own stream of the world's seed (SplitMix64's increment apart per slot).
+  // The body's flaws: its own stream, started at the hash of (world seed, slot). (Starts a fixed
+  // step apart would give shifted copies of one SplitMix64 sequence: body n + 1 would draw body n's
+  // strengths one tet later.)
   Body& b = bodies_[slot];
+  const std::array<std::uint64_t, 2> key{settings_.seed, static_cast<std::uint64_t>(slot)};
   b.tensile_strength =
-      sample_tensile_strengths(b.model->mesh, b.model->fem.material,
-                               settings_.seed + 0x9e3779b97f4a7c15ULL * static_cast<std::uint64_t>(slot + 1));
+      sample_tensile_strengths(b.model->mesh, b.model->fem.material, hash_bytes(key.data(), sizeof(key)));
   return body_id(slot);
 }
 
