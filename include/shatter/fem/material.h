@@ -40,7 +40,8 @@ struct Lame {
 Lame lame_parameters(const Material& m);
 
 /// Checks the fields: E > 0 and finite, nu in (-1, 0.5), density > 0 and finite, strengths > 0
-/// (may be +inf), Weibull modulus 0 or in [0.5, 1000], no NaN. The error's field names the offending member ("youngs_modulus", ...).
+/// (may be +inf), Weibull modulus 0 or in [0.5, 1000], no NaN. The error's field names the
+/// offending member ("youngs_modulus", ...).
 Result<void> validate_material(const Material& m);
 
 /// A named preset ("glass", "porcelain", "steel", ...) or an alias of one ("china", "aluminum", ...).

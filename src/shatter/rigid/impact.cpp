@@ -361,16 +361,14 @@ Result<void> respond(const BodyModel& model, BodyState& state, const std::vector
     result.max_von_mises = std::max(result.max_von_mises, s.von_mises);
   }
   const FractureOptions& fo = settings.fracture;
-  double max_tension = 0;  // as the crack criterion reads it
-  for (const TetStress& s : stress)
-    max_tension = std::max(max_tension, fo.crack.return_to_yield && s.von_mises > material.yield_stress
-                                            ? s.principal[0] * (material.yield_stress / s.von_mises)
-                                            : s.principal[0]);
-  bool over_strength = max_tension > material.tensile_strength;
-  if (!state.tensile_strength.empty()) {
-    over_strength = false;
-    for (std::size_t e = 0; e < stress.size() && !over_strength; ++e)
-      over_strength = stress[e].principal[0] > state.tensile_strength[e];  // at least the criterion's tension
+  // Some tet over its strength, by the tension the crack criterion reads (plan_cracks).
+  bool over_strength = false;
+  for (std::size_t e = 0; e < stress.size() && !over_strength; ++e) {
+    const TetStress& s = stress[e];
+    const double tension = fo.crack.return_to_yield && s.von_mises > material.yield_stress
+                               ? s.principal[0] * (material.yield_stress / s.von_mises)
+                               : s.principal[0];
+    over_strength = tension > (state.tensile_strength.empty() ? material.tensile_strength : state.tensile_strength[e]);
   }
   const bool may_crack = fo.crack.max_cracks > 0 && over_strength;
   const bool may_yield = fo.plasticity.enabled && result.max_von_mises > material.yield_stress;
