@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "collide/collide_shapes.h"
 #include "shatter/collide/broad_phase.h"
 #include "shatter/collide/contact.h"
 #include "shatter/collide/convex_decomposition.h"
@@ -19,6 +20,9 @@
 
 namespace shatter {
 namespace {
+
+using shapes::arc_mesh;
+using shapes::random_ball;
 
 Aabb cube(const Vec3& c, double half) {
   Aabb b;
@@ -97,16 +101,6 @@ void BM_RigidIntegrate(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * state.range(0));
 }
 BENCHMARK(BM_RigidIntegrate)->Arg(1000)->Unit(benchmark::kMicrosecond);
-
-// `n` points uniform in a ball of radius `radius`.
-std::vector<Vec3> random_ball(Random& rng, int n, double radius) {
-  std::vector<Vec3> p;
-  while (static_cast<int>(p.size()) < n) {
-    const Vec3 q = rng.uniform_vec3(-radius, radius);
-    if (q.norm() <= radius) p.push_back(q);
-  }
-  return p;
-}
 
 void BM_ConvexHull(benchmark::State& state) {
   Random rng(99);
@@ -188,18 +182,6 @@ BENCHMARK(BM_TetContact)->Unit(benchmark::kMicrosecond);
 
 // Convex decomposition: 0 a jittered 3^3-cell shard, 1 a bent plate, 2 a 5,000-tet jittered box,
 // 3 a thick half ring.
-TetMesh arc_mesh(std::array<Index, 3> cells, double angle, double thickness) {
-  TetMesh mesh = make_box_mesh({.min = Vec3(0, 0, 0), .max = Vec3(1, thickness, 0.2), .cells = cells});
-  for (Vec3& p : mesh.positions) {
-    const double a = angle * p.x(), r = 1 + p.y();
-    p = Vec3(r * std::cos(a), p.z(), r * std::sin(a));
-  }
-  for (TetIndices& t : mesh.tets)
-    if (signed_volume(mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]], mesh.positions[t[3]]) < 0)
-      std::swap(t[2], t[3]);
-  return mesh;
-}
-
 void BM_ConvexDecomposition(benchmark::State& state) {
   const int which = static_cast<int>(state.range(0));
   const TetMesh mesh = which == 0   ? make_box_mesh({.cells = {3, 3, 3}, .jitter = 0.2})

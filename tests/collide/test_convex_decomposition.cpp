@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "collide/collide_shapes.h"
 #include "shatter/collide/convex_decomposition.h"
 #include "shatter/mesh/generate.h"
 #include "shatter/mesh/topology.h"
@@ -13,25 +14,14 @@
 namespace shatter {
 namespace {
 
+using shapes::arc_mesh;
+
 // The tets of `mesh` for which keep(centroid) holds.
 TetMesh keep_tets(const TetMesh& mesh, const auto& keep) {
   std::vector<Index> kept;
   for (Index e = 0; e < mesh.num_tets(); ++e)
     if (keep(Vec3(mesh.corners(e).rowwise().mean()))) kept.push_back(e);
   return extract_tets(mesh, kept);
-}
-
-// A box mesh bent into an arc of `angle` radians: x -> angle, y -> radius 1 + y, z -> height.
-TetMesh arc_mesh(std::array<Index, 3> cells, double angle, double thickness) {
-  TetMesh mesh = make_box_mesh({.min = Vec3(0, 0, 0), .max = Vec3(1, thickness, 0.2), .cells = cells});
-  for (Vec3& p : mesh.positions) {
-    const double a = angle * p.x(), r = 1 + p.y();
-    p = Vec3(r * std::cos(a), p.z(), r * std::sin(a));
-  }
-  for (TetIndices& t : mesh.tets)
-    if (signed_volume(mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]], mesh.positions[t[3]]) < 0)
-      std::swap(t[2], t[3]);
-  return mesh;
 }
 
 // Every tet once, tets sorted, volumes summed, hulls holding the nodes; returns the largest over-fill.

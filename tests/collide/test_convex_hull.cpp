@@ -7,12 +7,15 @@
 #include <cmath>
 #include <cstdio>
 
+#include "collide/collide_shapes.h"
 #include "shatter/collide/convex_hull.h"
 #include "shatter/core/random.h"
 #include "shatter/mesh/generate.h"
 
 namespace shatter {
 namespace {
+
+using shapes::random_ball;
 
 // Largest height of any point above any face plane of the hull.
 double max_height_above(const ConvexHull& hull, std::span<const Vec3> points) {
@@ -29,15 +32,6 @@ int face_size(const ConvexHull& hull, Index f) {
   do ++n, e = hull.edges[e].next;
   while (e != hull.faces[f].edge);
   return n;
-}
-
-std::vector<Vec3> random_ball(Random& rng, int n, double radius) {
-  std::vector<Vec3> p;
-  while (static_cast<int>(p.size()) < n) {
-    const Vec3 q = rng.uniform_vec3(-radius, radius);
-    if (q.norm() <= radius) p.push_back(q);
-  }
-  return p;
 }
 
 // Expects the hull of a box with the given corners: 8 vertices, 12 edges, 6 quads, exact volume.
