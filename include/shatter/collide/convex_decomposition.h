@@ -28,13 +28,20 @@ struct DecompositionOptions {
   /// Upper bound on pieces; when the over-fill rule would make more, clusters are merged (least
   /// merged over-fill first) until this many remain. 0: no bound.
   Index max_pieces = 64;
+  /// Meshes of up to this many tets are grown tet by tet. Finer ones are grown from about `groups`
+  /// groups of neighbouring tets (face-connected tets whose centres share a cell of a grid), which
+  /// bounds the time; the hulls stay exact (the hull of the nodes of a piece's tets). 0: always
+  /// tet by tet.
+  Index group_above = 4096;
+  /// How many groups, about, when grouping (>= 1).
+  Index groups = 1024;
 };
 
 /// Convex pieces covering every tet of `mesh` once (pieces in order of their lowest tet), each
 /// hull holding its tets' nodes. Deterministic: the same mesh gives the same pieces in the same
 /// order. max_overfill steers the growth, which counts the unassigned tets a hull already encloses
 /// as material the piece will take; when neighbours take some of it, or leftovers are merged in, a
-/// piece can end above max_overfill (within 2x in the tests).
+/// piece can end above max_overfill (within 2x in the tests; 3x when grown from groups).
 /// Errors: a mesh with no tets; a piece whose points span no volume (degenerate tets).
 Result<std::vector<ConvexPiece>> decompose_convex(const TetMesh& mesh, const TetFaces& faces,
                                                   const DecompositionOptions& options = {});

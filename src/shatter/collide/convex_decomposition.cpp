@@ -1,13 +1,19 @@
 // Convex decomposition by region growing over face-connected tets, then merging (see
 // convex_decomposition.h).
-//  1. Growing: from the lowest-index tet not yet in a piece, add face neighbours. Tets whose nodes
-//     are all inside the current hull come first (they fill it; the hull does not change). Else the
-//     neighbour nearest the seed is tried: the hull with its nodes is kept when it over-fills the
-//     piece's tets, plus the unassigned tets whose centres it already encloses (the material the
-//     piece takes in next), by no more than max_overfill. Without counting that material a convex
-//     body could not be grown tet by tet: a small cluster's jagged front over-fills its hull.
-//     Candidates refused wait and are tried again whenever the hull grows. Hulls are rebuilt from
-//     the old hull's vertices and the new nodes only.
+//  0. Units: growth and merging work on units of face-connected tets. Up to group_above tets, each
+//     tet is a unit. Finer meshes are cut by a grid of cubes sized to hold about tets / groups tets
+//     each, and a unit is a face-connected set of tets with their centres in one cube, so the work
+//     stays about that of a mesh of `groups` tets (each trial hull is tested against the frontier,
+//     and both grow with the piece). The hulls are exact either way: the hull of the nodes of the
+//     tets a piece covers.
+//  1. Growing: from the unit with the lowest tet not yet in a piece, add neighbouring units. Units
+//     whose nodes are all inside the current hull come first (they fill it; the hull does not
+//     change). Else the neighbour nearest the seed is tried: the hull with its nodes is kept when it
+//     over-fills the piece's tets, plus the unassigned units whose centres it already encloses (the
+//     material the piece takes in next), by no more than max_overfill. Without counting that
+//     material a convex body could not be grown tet by tet: a small cluster's jagged front
+//     over-fills its hull. Candidates refused wait and are tried again whenever the hull grows.
+//     Hulls are rebuilt from the old hull's vertices and the new nodes only.
 //  2. Merging: adjacent pieces are joined while the merged over-fill is no more than the larger
 //     of max_overfill and the two pieces' own (least excess first), which also absorbs the small
 //     leftovers of growth. Then, while there are more than max_pieces, the least over-filling
@@ -17,6 +23,7 @@
 #include <algorithm>
 #include <cmath>
 #include <queue>
+#include <span>
 #include <tuple>
 
 namespace shatter {
@@ -24,7 +31,7 @@ namespace {
 
 struct Cluster {
   ConvexHull hull;
-  std::vector<Index> tets;
+  std::vector<Index> units;
   double volume = 0;  // tet volume, m^3
   Index version = 0;  // bumped on every change (stale queue entries)
   bool alive = true;
@@ -42,8 +49,8 @@ Result<ConvexHull> hull_with(const ConvexHull& hull, std::span<const Vec3> extra
   return build_convex_hull(scratch);
 }
 
-Error piece_error(const Error& e, Index seed) {
-  return make_error("convex decomposition: the piece grown from tet " + std::to_string(seed) +
+Error piece_error(const Error& e, Index seed_tet) {
+  return make_error("convex decomposition: the piece grown from tet " + std::to_string(seed_tet) +
                     " spans no volume (degenerate tets): " + e.message);
 }
 
@@ -53,13 +60,8 @@ class Decomposer {
       : mesh_(mesh), faces_(faces), options_(options) {}
 
   Result<std::vector<ConvexPiece>> run() {
-    const Index n = mesh_.num_tets();
-    volume_.resize(static_cast<std::size_t>(n));
-    centroid_.resize(static_cast<std::size_t>(n));
-    for (Index e = 0; e < n; ++e) {
-      volume_[e] = std::abs(signed_volume(mesh_, e));
-      centroid_[e] = mesh_.corners(e).rowwise().mean();
-    }
+    make_units();
+    const auto n = static_cast<Index>(volume_.size());
     mark_.assign(static_cast<std::size_t>(n), 0);
     checked_.assign(static_cast<std::size_t>(n), 0);
     piece_of_.assign(static_cast<std::size_t>(n), -1);
@@ -73,8 +75,10 @@ class Decomposer {
     std::vector<ConvexPiece> pieces;
     for (Cluster& c : clusters_) {
       if (!c.alive) continue;
-      std::sort(c.tets.begin(), c.tets.end());
-      pieces.push_back({std::move(c.hull), std::move(c.tets), c.volume});
+      std::vector<Index> tets;
+      for (const Index u : c.units) tets.insert(tets.end(), unit_tets(u).begin(), unit_tets(u).end());
+      std::sort(tets.begin(), tets.end());
+      pieces.push_back({std::move(c.hull), std::move(tets), c.volume});
     }
     std::sort(pieces.begin(), pieces.end(),
               [](const ConvexPiece& a, const ConvexPiece& b) { return a.tets.front() < b.tets.front(); });
@@ -82,11 +86,115 @@ class Decomposer {
   }
 
  private:
+  // Splits the tets into units (step 0 above), numbered in order of their lowest tet.
+  void make_units() {
+    const Index n = mesh_.num_tets();
+    std::vector<double> tet_volume(static_cast<std::size_t>(n));
+    std::vector<Vec3> tet_centroid(static_cast<std::size_t>(n));
+    double total = 0;
+    Aabb box;
+    for (Index e = 0; e < n; ++e) {
+      tet_volume[e] = std::abs(signed_volume(mesh_, e));
+      tet_centroid[e] = mesh_.corners(e).rowwise().mean();
+      total += tet_volume[e];
+      box.extend(tet_centroid[e]);
+    }
+    // Grid cell of each tet's centre: cubes of the volume of total / groups (0 for all when each
+    // tet is its own unit).
+    std::vector<std::uint64_t> cell(static_cast<std::size_t>(n), 0);
+    const bool grouped = options_.group_above > 0 && n > options_.group_above && total > 0;
+    if (grouped) {
+      const double size = std::cbrt(total / static_cast<double>(options_.groups));
+      const auto coordinate = [&](double x, double lo) {
+        return static_cast<std::uint64_t>(std::clamp(std::floor((x - lo) / size), 0.0, double{(1 << 21) - 1}));
+      };
+      for (Index e = 0; e < n; ++e) {
+        const Vec3& c = tet_centroid[e];
+        cell[e] = coordinate(c.x(), box.min.x()) << 42 | coordinate(c.y(), box.min.y()) << 21 |
+                  coordinate(c.z(), box.min.z());
+      }
+    }
+    // Units: the face-connected tets of one cell, by a walk from each tet not yet in one.
+    unit_of_.assign(static_cast<std::size_t>(n), -1);
+    unit_start_ = {0};
+    unit_tet_list_.clear();
+    for (Index seed = 0; seed < n; ++seed) {
+      if (unit_of_[seed] >= 0) continue;
+      const auto u = static_cast<Index>(unit_start_.size() - 1);
+      const std::size_t first = unit_tet_list_.size();
+      unit_of_[seed] = u;
+      unit_tet_list_.push_back(seed);
+      if (grouped)
+        for (std::size_t q = first; q < unit_tet_list_.size(); ++q)  // NOLINT(modernize-loop-convert): grows
+          for (int k = 0; k < 4; ++k) {
+            const Index nb = faces_.neighbor(unit_tet_list_[q], k);
+            if (nb < 0 || unit_of_[nb] >= 0 || cell[nb] != cell[seed]) continue;
+            unit_of_[nb] = u;
+            unit_tet_list_.push_back(nb);
+          }
+      unit_start_.push_back(static_cast<Index>(unit_tet_list_.size()));
+    }
+    // Per unit: volume, centre (volume-weighted; a single tet's is its centroid), its nodes (in
+    // order of first use) and its neighbouring units (in order of first meeting; for single tets,
+    // the face neighbours in face order).
+    const auto units = static_cast<Index>(unit_start_.size() - 1);
+    volume_.assign(static_cast<std::size_t>(units), 0);
+    centroid_.assign(static_cast<std::size_t>(units), Vec3::Zero());
+    node_start_ = {0};
+    node_list_.clear();
+    neighbour_start_ = {0};
+    neighbour_list_.clear();
+    std::vector<Index> node_seen(mesh_.positions.size(), -1);
+    std::vector<Index> unit_seen(static_cast<std::size_t>(units), -1);
+    for (Index u = 0; u < units; ++u) {
+      const std::span<const Index> tets = unit_tets(u);
+      if (tets.size() == 1) {
+        volume_[u] = tet_volume[tets[0]];
+        centroid_[u] = tet_centroid[tets[0]];
+      } else {
+        for (const Index e : tets) {
+          volume_[u] += tet_volume[e];
+          centroid_[u] += tet_volume[e] * tet_centroid[e];
+        }
+        centroid_[u] /= volume_[u] > 0 ? volume_[u] : 1.0;
+      }
+      for (const Index e : tets)
+        for (const Index v : mesh_.tets[e])
+          if (node_seen[v] != u) {
+            node_seen[v] = u;
+            node_list_.push_back(mesh_.positions[v]);
+          }
+      node_start_.push_back(static_cast<Index>(node_list_.size()));
+      for (const Index e : tets)
+        for (int k = 0; k < 4; ++k) {
+          const Index nb = faces_.neighbor(e, k);
+          if (nb < 0 || unit_of_[nb] == u || unit_seen[unit_of_[nb]] == u) continue;
+          unit_seen[unit_of_[nb]] = u;
+          neighbour_list_.push_back(unit_of_[nb]);
+        }
+      neighbour_start_.push_back(static_cast<Index>(neighbour_list_.size()));
+    }
+  }
+
+  std::span<const Index> unit_tets(Index u) const {
+    return {unit_tet_list_.data() + unit_start_[u], unit_tet_list_.data() + unit_start_[u + 1]};
+  }
+  std::span<const Vec3> nodes(Index u) const {
+    return {node_list_.data() + node_start_[u], node_list_.data() + node_start_[u + 1]};
+  }
+  std::span<const Index> neighbours(Index u) const {
+    return {neighbour_list_.data() + neighbour_start_[u], neighbour_list_.data() + neighbour_start_[u + 1]};
+  }
+  bool nodes_inside(const ConvexHull& hull, Index u) const {
+    const std::span<const Vec3> x = nodes(u);
+    return std::all_of(x.begin(), x.end(), [&](const Vec3& p) { return inside(hull, p); });
+  }
+
   // Over-fill of a hull over tets of `volume`.
   static double overfill(const ConvexHull& hull, double volume) { return (hull.volume - volume) / volume; }
 
-  // Volume of the unassigned tets whose centroids lie inside `hull`, reached from the frontier
-  // and from e through such tets, m^3: the material a growing cluster will take in next.
+  // Volume of the unassigned units whose centres lie inside `hull`, reached from the frontier
+  // and from e through such units, m^3: the material a growing cluster will take in next.
   double fill_volume(const ConvexHull& hull, Index e) {
     ++stamp_;
     double volume = 0;
@@ -99,25 +207,19 @@ class Decomposer {
       queue_tets_.push_back(t);
     };
     for (Index t : frontier_) visit(t);
-    for (int k = 0; k < 4; ++k) visit(faces_.neighbor(e, k));
+    for (const Index t : neighbours(e)) visit(t);
     for (std::size_t q = 0; q < queue_tets_.size(); ++q)  // NOLINT(modernize-loop-convert): grows while visited
-      for (int k = 0; k < 4; ++k) visit(faces_.neighbor(queue_tets_[q], k));
+      for (const Index t : neighbours(queue_tets_[q])) visit(t);
     return volume;
-  }
-
-  std::array<Vec3, 4> nodes(Index e) const {
-    const TetIndices& t = mesh_.tets[e];
-    return {mesh_.positions[t[0]], mesh_.positions[t[1]], mesh_.positions[t[2]], mesh_.positions[t[3]]};
   }
 
   Result<void> grow(Index seed) {
     const auto id = static_cast<Index>(clusters_.size());
-    const std::array<Vec3, 4> seed_nodes = nodes(seed);
-    auto hull = build_convex_hull(seed_nodes);
-    if (!hull.ok()) return piece_error(hull.error(), seed);
+    auto hull = build_convex_hull(nodes(seed));
+    if (!hull.ok()) return piece_error(hull.error(), unit_tets(seed).front());
     Cluster c;
     c.hull = std::move(*hull);
-    c.tets = {seed};
+    c.units = {seed};
     c.volume = volume_[seed];
     piece_of_[seed] = id;
     frontier_.clear();
@@ -128,7 +230,7 @@ class Decomposer {
     deferred_.clear();
     Index builds = 0;
     std::int64_t hull_version = ++hull_versions_;
-    const Index max_builds = 16 + 4 * mesh_.num_tets();
+    const Index max_builds = 16 + 4 * static_cast<Index>(volume_.size());
     while (!frontier_.empty()) {
       // A frontier tet inside the hull (the first in frontier order), else the one nearest the seed.
       // (checked_[t] == hull_version: t was found not inside this hull already.)
@@ -136,8 +238,7 @@ class Decomposer {
       for (std::size_t k = 0; k < frontier_.size() && pick == frontier_.size(); ++k) {
         const Index t = frontier_[k];
         if (checked_[t] == hull_version) continue;
-        const std::array<Vec3, 4> x = nodes(t);
-        if (inside(c.hull, x[0]) && inside(c.hull, x[1]) && inside(c.hull, x[2]) && inside(c.hull, x[3]))
+        if (nodes_inside(c.hull, t))
           pick = k;
         else
           checked_[t] = hull_version;
@@ -155,8 +256,7 @@ class Decomposer {
       if (!free) {
         if (builds >= max_builds) continue;
         ++builds;
-        const std::array<Vec3, 4> x = nodes(e);
-        auto grown = hull_with(c.hull, x, scratch_);
+        auto grown = hull_with(c.hull, nodes(e), scratch_);
         if (!grown.ok() || overfill(*grown, c.volume + volume_[e] + fill_volume(*grown, e)) > options_.max_overfill) {
           deferred_.push_back(e);
           continue;
@@ -166,7 +266,7 @@ class Decomposer {
         frontier_.insert(frontier_.end(), deferred_.begin(), deferred_.end());
         deferred_.clear();
       }
-      c.tets.push_back(e);
+      c.units.push_back(e);
       c.volume += volume_[e];
       piece_of_[e] = id;
       add_neighbours(e, id);
@@ -175,11 +275,10 @@ class Decomposer {
     return {};
   }
 
-  // Unassigned face neighbours of e not yet offered to piece `id` join the frontier.
+  // Unassigned neighbours of unit e not yet offered to piece `id` join the frontier.
   void add_neighbours(Index e, Index id) {
-    for (int k = 0; k < 4; ++k) {
-      const Index nb = faces_.neighbor(e, k);
-      if (nb < 0 || piece_of_[nb] >= 0 || tried_[nb] == id) continue;
+    for (const Index nb : neighbours(e)) {
+      if (piece_of_[nb] >= 0 || tried_[nb] == id) continue;
       tried_[nb] = id;
       frontier_.push_back(nb);
     }
@@ -212,7 +311,7 @@ class Decomposer {
     for (Index f = 0; f < faces_.num_faces(); ++f) {
       const auto& ft = faces_.face_tets[f];
       if (ft[1] < 0) continue;
-      const Index a = piece_of_[ft[0]], b = piece_of_[ft[1]];
+      const Index a = piece_of_[unit_of_[ft[0]]], b = piece_of_[unit_of_[ft[1]]];
       if (a != b) neighbours_[a].push_back(b), neighbours_[b].push_back(a);
     }
     for (auto& nb : neighbours_) {
@@ -237,12 +336,12 @@ class Decomposer {
         auto hull = build_convex_hull(scratch_);
         if (!hull.ok()) continue;
         ca.hull = std::move(*hull);
-        for (Index e : cb.tets) piece_of_[e] = c.a;
-        ca.tets.insert(ca.tets.end(), cb.tets.begin(), cb.tets.end());
+        for (Index u : cb.units) piece_of_[u] = c.a;
+        ca.units.insert(ca.units.end(), cb.units.begin(), cb.units.end());
         ca.volume += cb.volume;
         ++ca.version;
         cb.alive = false;
-        cb.tets = {};
+        cb.units = {};
         --alive;
         // a takes b's neighbours.
         std::vector<Index> nb;
@@ -289,19 +388,25 @@ class Decomposer {
   const TetMesh& mesh_;
   const TetFaces& faces_;
   DecompositionOptions options_;
-  std::vector<double> volume_;   // |volume| per tet
-  std::vector<Vec3> centroid_;   // per tet
-  std::vector<Index> piece_of_;  // cluster of each tet, -1 while unassigned
-  std::vector<Index> tried_;     // last cluster that put the tet on its frontier
-  std::vector<Index> frontier_;  // candidate tets of the growing cluster
+  // Units (CSR lists): their tets, nodes and neighbouring units.
+  std::vector<Index> unit_of_;  // per tet
+  std::vector<Index> unit_start_, unit_tet_list_;
+  std::vector<Index> node_start_;
+  std::vector<Vec3> node_list_;
+  std::vector<Index> neighbour_start_, neighbour_list_;
+  std::vector<double> volume_;   // tet volume per unit, m^3
+  std::vector<Vec3> centroid_;   // per unit
+  std::vector<Index> piece_of_;  // cluster of each unit, -1 while unassigned
+  std::vector<Index> tried_;     // last cluster that put the unit on its frontier
+  std::vector<Index> frontier_;  // candidate units of the growing cluster
   std::vector<Index> deferred_;  // candidates its hull could not take yet
   std::vector<Cluster> clusters_;
   std::vector<std::vector<Index>> neighbours_;  // adjacent clusters, sorted
   std::priority_queue<Candidate, std::vector<Candidate>, std::greater<>> queue_;
   std::vector<Vec3> scratch_;
-  std::vector<Index> mark_, queue_tets_;  // fill_volume's visit stamps and queue
+  std::vector<Index> mark_, queue_tets_;  // fill_volume's visit stamps and queue (units)
   Index stamp_ = 0;
-  std::vector<std::int64_t> checked_;  // per tet: the hull version it was last found not inside
+  std::vector<std::int64_t> checked_;  // per unit: the hull version it was last found not inside
   std::int64_t hull_versions_ = 0;     // hull versions handed out (all pieces)
 };
 
@@ -313,8 +418,9 @@ Result<std::vector<ConvexPiece>> decompose_convex(const TetMesh& mesh, const Tet
   if (faces.tet_faces.size() != mesh.tets.size())
     return make_error("convex decomposition: the faces are not those of this mesh (" +
                       std::to_string(faces.tet_faces.size()) + " tets vs " + std::to_string(mesh.tets.size()) + ")");
-  if (!(options.max_overfill >= 0) || options.max_pieces < 0)
-    return make_error("convex decomposition: max_overfill must be >= 0 and max_pieces >= 0");
+  if (!(options.max_overfill >= 0) || options.max_pieces < 0 || options.group_above < 0 || options.groups < 1)
+    return make_error(
+        "convex decomposition: max_overfill must be >= 0, max_pieces >= 0, group_above >= 0 and groups >= 1");
   Decomposer d(mesh, faces, options);
   return d.run();
 }

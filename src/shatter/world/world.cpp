@@ -229,7 +229,9 @@ Result<std::shared_ptr<const World::Shape>> World::shared_tet_shape(
     for (const Entry& e : cache)
       if (e.model.lock() == model && e.mode == settings_.contact_mode &&
           e.options.max_overfill == settings_.decomposition.max_overfill &&
-          e.options.max_pieces == settings_.decomposition.max_pieces)
+          e.options.max_pieces == settings_.decomposition.max_pieces &&
+          e.options.group_above == settings_.decomposition.group_above &&
+          e.options.groups == settings_.decomposition.groups)
         return e.shape;
   }
   auto shape = make_tet_shape(*model);
