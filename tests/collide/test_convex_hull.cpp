@@ -167,6 +167,9 @@ TEST(ConvexHull, RandomCloudsMatchBruteForce) {
     const double estimate = frac * box.extent().prod();
     const double sigma = std::sqrt(frac * (1 - frac) / samples) * box.extent().prod();
     EXPECT_NEAR(hull->volume, estimate, 5 * sigma + 1e-9) << "trial " << trial;
+    auto volume = convex_hull_volume(points);
+    ASSERT_TRUE(volume.ok());
+    EXPECT_NEAR(*volume, hull->volume, 1e-12 * hull->volume) << "trial " << trial;
     // Centroid inside, radius covers every vertex.
     for (const HullFace& f : hull->faces) EXPECT_LT(f.normal.dot(hull->centroid) - f.offset, 0);
   }
@@ -220,6 +223,11 @@ TEST(ConvexHull, DegenerateCloudsGiveValidHulls) {
     // Noise at the tolerance's own scale: merged faces may leave a point slightly more than the
     // tolerance out (about 1 in 5,000 such clouds, by < 1.2x).
     EXPECT_LE(max_height_above(*hull, points), 1.5 * hull->tolerance) << "trial " << trial;
+    // The triangle stage's volume: the same up to faces merged within the tolerance.
+    auto volume = convex_hull_volume(points);
+    ASSERT_TRUE(volume.ok()) << "trial " << trial;
+    EXPECT_NEAR(*volume, hull->volume, 2 * hull->tolerance * 4 * M_PI * hull->radius * hull->radius)
+        << "trial " << trial;
     if (kind == 3) {
       EXPECT_EQ(hull->faces.size(), static_cast<std::size_t>((points.size() / 4) + 2));
     }
@@ -288,6 +296,9 @@ TEST(ConvexHull, DegenerateInputIsAnError) {
     auto hull = build_convex_hull(p);
     ASSERT_FALSE(hull.ok());
     EXPECT_NE(hull.error().message.find(word), std::string::npos) << hull.error().message;
+    auto volume = convex_hull_volume(p);
+    ASSERT_FALSE(volume.ok());
+    EXPECT_EQ(volume.error().message, hull.error().message);
   };
   fails({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, "at least 4");
   fails({}, "at least 4");
@@ -324,6 +335,13 @@ TEST(ConvexHull, CheckCatchesBrokenHulls) {
   flipped.faces[1].normal = -flipped.faces[1].normal;
   flipped.faces[1].offset = -flipped.faces[1].offset;
   EXPECT_NE(check_convex_hull(flipped, 1e-9), "");
+  // A face whose plane is tilted: its own vertices no longer on it (all still behind every plane).
+  ConvexHull tilted = *hull;
+  tilted.faces[0].normal = (tilted.faces[0].normal + Vec3(0.05, 0.05, 0.05)).normalized();
+  double highest = -1e300;
+  for (const Vec3& v : tilted.vertices) highest = std::max(highest, tilted.faces[0].normal.dot(v));
+  tilted.faces[0].offset = highest;
+  EXPECT_NE(check_convex_hull(tilted, 1e-9).find("below its plane"), std::string::npos);
   // A flat box split by a crease of 1e-12: its two halves are coplanar at 1e-9.
   std::vector<Vec3> creased = {Vec3(0, 0, 0),      Vec3(2, 0, 0), Vec3(0, 1, 0), Vec3(2, 1, 0), Vec3(1, 0, -1e-12),
                                Vec3(1, 1, -1e-12), Vec3(0, 0, 1), Vec3(2, 0, 1), Vec3(0, 1, 1), Vec3(2, 1, 1)};

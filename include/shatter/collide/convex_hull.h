@@ -60,9 +60,14 @@ struct HullOptions {
 /// or line, within the tolerance).
 Result<ConvexHull> build_convex_hull(std::span<const Vec3> points, const HullOptions& options = {});
 
+/// Volume of the hull of `points`, m^3, from the triangle stage of build_convex_hull alone (no
+/// faces merged, no structure kept): for callers that only compare volumes, at about half the
+/// cost. Agrees with build_convex_hull's volume to round-off. Errors: as build_convex_hull.
+Result<double> convex_hull_volume(std::span<const Vec3> points, const HullOptions& options = {});
+
 /// Checks a hull's structure and convexity (for tests and debug builds): twins and face loops
 /// consistent, Euler V - E + F = 2, every vertex on or behind every face plane within
-/// `tolerance`, adjacent faces not coplanar (coplanar: the vertices of both fit in a slab of width
+/// `tolerance`, each face's own vertices within 2 x `tolerance` of its plane, adjacent faces not coplanar (coplanar: the vertices of both fit in a slab of width
 /// `tolerance` across either face's normal; the builder merges such faces). Returns an empty
 /// string when valid, else what failed.
 std::string check_convex_hull(const ConvexHull& hull, double tolerance);

@@ -650,7 +650,10 @@ Index ConvexHull::support(const Vec3& d) const {
   return best;
 }
 
-Result<ConvexHull> build_convex_hull(std::span<const Vec3> points, const HullOptions& options) {
+namespace {
+
+// Checks the input; the tolerance HullOptions asks for, resolved for these points, m.
+Result<double> hull_tolerance(std::span<const Vec3> points, const HullOptions& options) {
   if (points.size() < 4)
     return make_error("convex hull: needs at least 4 points, got " + std::to_string(points.size()));
   if (points.size() > static_cast<std::size_t>(std::numeric_limits<Index>::max() / 8))
@@ -663,7 +666,29 @@ Result<ConvexHull> build_convex_hull(std::span<const Vec3> points, const HullOpt
   if (!(options.tolerance >= 0) || !std::isfinite(options.tolerance))
     return make_error("convex hull: the tolerance must be finite and >= 0");
   const double magnitude = lo.cwiseAbs().cwiseMax(hi.cwiseAbs()).sum();
-  const double tol = options.tolerance > 0 ? options.tolerance : 1e-9 * (hi - lo).maxCoeff() + 8 * kEps * magnitude;
+  return options.tolerance > 0 ? options.tolerance : 1e-9 * (hi - lo).maxCoeff() + 8 * kEps * magnitude;
+}
+
+}  // namespace
+
+Result<double> convex_hull_volume(std::span<const Vec3> points, const HullOptions& options) {
+  SHATTER_TRY(tol, hull_tolerance(points, options));
+  TriangleHull tri_hull(points, *tol);
+  SHATTER_TRY(built, tri_hull.build());
+  // Sum of the tets from a point inside (the first point of the initial simplex) to each triangle.
+  double volume = 0;
+  const Vec3& o = points[tri_hull.triangles().front().v[0]];
+  for (const auto& tri : tri_hull.triangles())
+    if (tri.alive) {
+      const auto& v = tri.v;
+      volume += (points[v[0]] - o).dot((points[v[1]] - o).cross(points[v[2]] - o));
+    }
+  return volume / 6;
+}
+
+Result<ConvexHull> build_convex_hull(std::span<const Vec3> points, const HullOptions& options) {
+  SHATTER_TRY(tolerance, hull_tolerance(points, options));
+  const double tol = *tolerance;
 
   TriangleHull tri_hull(points, tol);
   SHATTER_TRY(built, tri_hull.build());
@@ -695,12 +720,16 @@ Result<ConvexHull> build_convex_hull(std::span<const Vec3> points, const HullOpt
       if (!merges.empty()) continue;
       if (!assemble(points, polys, hull))
         return make_error("convex hull: inconsistent surface (round-off); try a larger tolerance");
+      // Each face joins at most one neighbour per pass: coplanarity is not transitive (a ~ b and
+      // b ~ c with a and c apart by more than the tolerance), so a chain is re-checked on the
+      // merged faces next pass.
       bool merged = false;
+      std::vector<char> joined(hull.faces.size(), 0);
       for (std::size_t k = 0; k < hull.edges.size(); k += 2) {
         const Index fa = hull.edges[k].face, fb = hull.edges[k + 1].face;
         const Index ra = polys.root[fa], rb = polys.root[fb];
-        if (frozen[ra] || frozen[rb] || clusters.find(ra) == clusters.find(rb)) continue;
-        if (coplanar(hull, fa, fb, tol)) clusters.unite(ra, rb), merged = true;
+        if (joined[fa] || joined[fb] || frozen[ra] || frozen[rb] || clusters.find(ra) == clusters.find(rb)) continue;
+        if (coplanar(hull, fa, fb, tol)) clusters.unite(ra, rb), merged = true, joined[fa] = joined[fb] = 1;
       }
       if (!merged) break;
     }
@@ -758,6 +787,13 @@ std::string check_convex_hull(const ConvexHull& hull, double tolerance) {
       }
       seen[e] = 1;
       vertex_used[hull.edges[e].origin] = 1;
+      // Its own vertices on its plane: a slab of the tolerance below the highest (twice that
+      // allowed for round-off in the normal).
+      const double below = face.offset - face.normal.dot(hull.vertices[hull.edges[e].origin]);
+      if (below > 2 * tolerance) {
+        err << "face " << f << ": vertex " << hull.edges[e].origin << " is " << below << " below its plane";
+        return err.str();
+      }
       e = hull.edges[e].next;
     } while (e != face.edge && ++count <= ne);
     if (count < 2 || count > ne) {
