@@ -293,16 +293,28 @@ class Decomposer {
     bool operator>(const Candidate& o) const { return std::tie(overfill, a, b) > std::tie(o.overfill, o.a, o.b); }
   };
 
+  // Queues the merge of a and b. Only the merged hull's volume is needed here (the hull is built
+  // when the merge is made): that of the triangle hull, from the larger hull's vertices and the
+  // smaller's outside it (none: the larger hull itself).
   void offer(Index a, Index b) {
     if (a > b) std::swap(a, b);
     const Cluster& ca = clusters_[a];
     const Cluster& cb = clusters_[b];
-    scratch_.assign(ca.hull.vertices.begin(), ca.hull.vertices.end());
-    scratch_.insert(scratch_.end(), cb.hull.vertices.begin(), cb.hull.vertices.end());
-    auto hull = build_convex_hull(scratch_);
-    if (!hull.ok()) return;
+    const bool a_larger = ca.hull.vertices.size() >= cb.hull.vertices.size();
+    const ConvexHull& large = a_larger ? ca.hull : cb.hull;
+    const ConvexHull& small = a_larger ? cb.hull : ca.hull;
+    scratch_.assign(large.vertices.begin(), large.vertices.end());
+    for (const Vec3& x : small.vertices)
+      if (!inside(large, x)) scratch_.push_back(x);
+    double merged = large.volume;
+    if (scratch_.size() > large.vertices.size()) {
+      auto volume = convex_hull_volume(scratch_);
+      if (!volume.ok()) return;
+      merged = *volume;
+    }
     const double own = std::max({options_.max_overfill, overfill(ca.hull, ca.volume), overfill(cb.hull, cb.volume)});
-    queue_.push({overfill(*hull, ca.volume + cb.volume) - own, a, b, ca.version, cb.version});
+    const double tets = ca.volume + cb.volume;
+    queue_.push({(merged - tets) / tets - own, a, b, ca.version, cb.version});
   }
 
   Result<void> merge() {
