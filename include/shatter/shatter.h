@@ -45,6 +45,7 @@
 #include "shatter/fracture/fragments.h"
 #include "shatter/fracture/plasticity.h"
 #include "shatter/fracture/stress.h"
+#include "shatter/solve/dynamic_solver.h"
 #include "shatter/solve/linear_solvers.h"
 #include "shatter/solve/static_solver.h"
 
