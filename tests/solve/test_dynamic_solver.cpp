@@ -164,7 +164,7 @@ TEST(DynamicSolver, SameBitsOnAnyThreadCount) {
 TEST(DynamicSolver, BadInputIsAnErrorAndLeavesTheState) {
   Cube c = soft_cube(0.3, 0.0);
   const DynamicState before = c.state;
-  const auto fails = [&](DynamicSolverOptions o, std::vector<ContactPlane> planes, DynamicState s,
+  const auto fails = [&](const DynamicSolverOptions& o, const std::vector<ContactPlane>& planes, DynamicState s,
                          const std::string& word) {
     DynamicSolver solver(o);
     const DynamicState kept = s;
