@@ -124,6 +124,18 @@ TEST(SceneRun, EveryBundledSceneRuns) {
   EXPECT_GE(count, 3);
 }
 
+// The large scenes are too big to build in CI; their files must still read (keys, paths, values).
+TEST(SceneRun, EveryLargeSceneReads) {
+  int count = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(scenes_dir() + "/large")) {
+    if (entry.path().extension() != ".json") continue;
+    ++count;
+    auto scene = read_scene(entry.path().string());
+    ASSERT_OK(scene);
+  }
+  EXPECT_GE(count, 4);
+}
+
 std::uint64_t vase_hash(int threads) {
   const int saved = num_threads();
   set_num_threads(threads);
