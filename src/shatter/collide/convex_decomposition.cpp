@@ -294,8 +294,8 @@ class Decomposer {
   };
 
   // Queues the merge of a and b. Only the merged hull's volume is needed here (the hull is built
-  // when the merge is made): that of the triangle hull, from the larger hull's vertices and the
-  // smaller's outside it (none: the larger hull itself).
+  // when the merge is made): that of the triangle hull, from the vertices of the hull with more of
+  // them and those of the other outside it (none outside: the first hull itself).
   void offer(Index a, Index b) {
     if (a > b) std::swap(a, b);
     const Cluster& ca = clusters_[a];
