@@ -213,7 +213,7 @@ void BM_DynamicStep(benchmark::State& state) {
   Material soft = glass();
   soft.youngs_modulus = 1e5, soft.poisson_ratio = 0.3, soft.density = 1000;
   const FemModel model = make_fem_model(mesh, soft, ModelKind::stvk);
-  const ContactPlane ground{.normal = Vec3::UnitY(), .offset = 0, .friction = 0.5};
+  const DynamicObstacles ground{.planes = {ContactPlane{.normal = Vec3::UnitY(), .offset = 0, .friction = 0.5}}};
   int iterations = 0, steps = 0;
   for (auto _ : state) {
     state.PauseTiming();
@@ -221,7 +221,7 @@ void BM_DynamicStep(benchmark::State& state) {
     DynamicState s{mesh.positions, std::vector<Vec3>(mesh.positions.size(), Vec3::Zero())};
     state.ResumeTiming();
     for (int k = 0; k < 60; ++k) {
-      auto r = solver.step(model, {&ground, 1}, s);
+      auto r = solver.step(model, ground, s);
       if (!r.ok() || !r->converged) {
         state.SkipWithError("the step failed");
         return;

@@ -1,6 +1,6 @@
 // Full FEM dynamics by implicit Euler (docs/dynamics.md): free fall exactly as eq. 20 says, linear
-// momentum kept, energy that never grows, a soft cube that bounces and settles on the ground, the
-// same bits on any thread count, bad input refused.
+// momentum kept, energy that never grows, a soft cube that bounces and settles on the ground or on
+// a box (pushing it with its weight), the same bits on any thread count, bad input refused.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -92,13 +92,27 @@ struct Drop {
   std::vector<double> energy;  // J
   DynamicState final;
   int max_iterations = 0;
+  DynamicStepReport last;  // one more step after `final`
+  Vec3 centre;             // centre of mass after it, m
+  double mass = 0;         // kg
 };
 
-Drop drop(const DynamicSolverOptions& options, int steps) {
+// The ground as a plane, or as the top of a static 2 x 0.5 x 2 m box.
+DynamicObstacles ground(bool as_box) {
+  if (!as_box) return {.planes = {ContactPlane{.normal = Vec3::UnitY(), .offset = 0, .friction = 0.5}}};
+  ContactConvex box{.faces = {}, .friction = 0.5};
+  for (int axis = 0; axis < 3; ++axis)
+    for (const double sign : {1.0, -1.0}) {
+      const Vec3 n = sign * Vec3::Unit(axis);
+      box.faces.push_back({n, axis == 1 ? (sign > 0 ? 0.0 : 0.5) : 1.0});
+    }
+  return {.convexes = {box}};
+}
+
+Drop drop(const DynamicSolverOptions& options, int steps, bool on_box = false) {
   Cube c = soft_cube(0.3, 0.4);
   DynamicSolver solver(options);
-  const ContactPlane ground{.normal = Vec3::UnitY(), .offset = 0, .friction = 0.5};
-  const std::span<const ContactPlane> planes(&ground, 1);
+  const DynamicObstacles planes = ground(on_box);
   Drop d;
   d.energy.push_back(solver.energy(c.model, planes, c.state));
   for (int k = 0; k < steps; ++k) {
@@ -115,6 +129,13 @@ Drop drop(const DynamicSolverOptions& options, int steps) {
     d.energy.push_back(solver.energy(c.model, planes, c.state));
   }
   d.final = c.state;
+  d.last = solver.step(c.model, planes, c.state).value();
+  double mass = 0;
+  d.centre = Vec3::Zero();
+  for (Index i = 0; i < c.model.num_nodes; ++i)
+    mass += c.model.node_mass[i], d.centre += c.model.node_mass[i] * c.state.x[i];
+  d.centre /= mass;
+  d.mass = mass;
   return d;
 }
 
@@ -142,6 +163,24 @@ TEST(DynamicSolver, SoftCubeBouncesAndSettles) {
       touch, -d.vy[touch], up, speed, -lowest, d.max_iterations);
 }
 
+// A convex obstacle acts as the plane of its nearest face: the cube falling on the top of a box
+// moves exactly as on the ground plane. At rest, it pushes the box with its weight, under its
+// centre.
+TEST(DynamicSolver, ConvexObstaclesActLikeTheirNearestFace) {
+  const Drop on_plane = drop({}, 240);
+  const Drop on_box = drop({}, 240, true);
+  EXPECT_EQ(on_plane.final.x, on_box.final.x);
+  EXPECT_EQ(on_plane.final.v, on_box.final.v);
+  ASSERT_EQ(on_box.last.convex_impulse.size(), 1u);
+  const DynamicSolverOptions o;
+  const Vec3 weight = on_box.mass * o.gravity * o.time_step;  // N s over one step
+  const Vec3 impulse = on_box.last.convex_impulse[0];
+  EXPECT_LT((impulse - weight).norm(), 1e-3 * weight.norm());
+  const Vec3 about_centre = on_box.last.convex_moment[0] - on_box.centre.cross(impulse);
+  EXPECT_LT(about_centre.norm(), 1e-3 * weight.norm() * 0.2);
+  EXPECT_TRUE(on_plane.last.convex_impulse.empty());
+}
+
 TEST(DynamicSolver, RayleighDampingTakesEnergyAway) {
   const Drop plain = drop({}, 60);
   const Drop damped = drop({.mass_damping = 2.0, .stiffness_damping = 0.01}, 60);
@@ -164,7 +203,7 @@ TEST(DynamicSolver, SameBitsOnAnyThreadCount) {
 TEST(DynamicSolver, BadInputIsAnErrorAndLeavesTheState) {
   Cube c = soft_cube(0.3, 0.0);
   const DynamicState before = c.state;
-  const auto fails = [&](const DynamicSolverOptions& o, const std::vector<ContactPlane>& planes, DynamicState s,
+  const auto fails = [&](const DynamicSolverOptions& o, const DynamicObstacles& planes, DynamicState s,
                          const std::string& word) {
     DynamicSolver solver(o);
     const DynamicState kept = s;
@@ -183,8 +222,14 @@ TEST(DynamicSolver, BadInputIsAnErrorAndLeavesTheState) {
   fails({.time_step = INFINITY}, {}, before, "time_step");
   fails({.mass_damping = -1}, {}, before, "damping");
   fails({.contact_stiffness = 0}, {}, before, "contact_stiffness");
-  fails({}, {ContactPlane{.normal = Vec3(0, 2, 0)}}, before, "plane 0");
-  fails({}, {ContactPlane{.friction = -0.1}}, before, "plane 0");
+  fails({}, {.planes = {ContactPlane{.normal = Vec3(0, 2, 0)}}}, before, "plane 0");
+  fails({}, {.planes = {ContactPlane{.friction = -0.1}}}, before, "plane 0");
+  DynamicObstacles box = ground(true);
+  box.convexes[0].faces.resize(3);
+  fails({}, box, before, "convex 0");
+  box = ground(true);
+  box.convexes[0].faces[2].offset = NAN;
+  fails({}, box, before, "convex 0");
 }
 
 }  // namespace

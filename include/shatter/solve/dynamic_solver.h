@@ -27,6 +27,26 @@ struct ContactPlane {
   double friction = 0.5;        ///< Coulomb coefficient (static = dynamic), >= 0
 };
 
+/// One face plane of a convex obstacle: normal . x <= offset inside.
+struct HalfSpace {
+  Vec3 normal = Vec3::UnitX();  ///< outward unit normal
+  double offset = 0;            ///< m
+};
+
+/// A convex obstacle that holds still during the step: the intersection of its faces' half-spaces
+/// (a convex hull's faces in world coordinates, say). A node inside is pushed out through the face
+/// it is least deep behind.
+struct ContactConvex {
+  std::vector<HalfSpace> faces;  ///< at least 4
+  double friction = 0.5;         ///< Coulomb coefficient, >= 0
+};
+
+/// What the nodes collide with.
+struct DynamicObstacles {
+  std::vector<ContactPlane> planes;
+  std::vector<ContactConvex> convexes;
+};
+
 /// Settings of DynamicSolver.
 struct DynamicSolverOptions {
   double time_step = 1.0 / 60;       ///< h, s
@@ -59,9 +79,14 @@ struct DynamicStepReport {
   bool converged = false;     ///< the Newton step fell below the tolerance
   int newton_iterations = 0;  ///< this step
   int line_search_cuts = 0;   ///< step halvings
-  int contacts = 0;           ///< node-plane pairs in contact at the end of the step
+  int contacts = 0;           ///< node-obstacle pairs in contact at the end of the step
   double max_step = 0;        ///< the last Newton step's largest node move, m
-  std::string message;        ///< why it did not converge ("" when it did)
+  /// Per convex obstacle, what the body pushed it with over the step (contact and friction forces
+  /// at the step's end times h): the impulse, N s, and its moment about the world origin, N m s
+  /// (for an obstacle that is a rigid body: its angular impulse about its centre c is
+  /// moment - c x impulse).
+  std::vector<Vec3> convex_impulse, convex_moment;
+  std::string message;  ///< why it did not converge ("" when it did)
 };
 
 /// Steps one FEM body; keeps the stiffness pattern and the linear solver's analysis between steps.
@@ -73,17 +98,18 @@ class DynamicSolver {
   /// The current settings.
   [[nodiscard]] const DynamicSolverOptions& options() const { return options_; }
 
-  /// Advances `state` by one time step against `planes`. Errors (state left as it was): state sizes
-  /// that are not the model's node count, non-finite positions or velocities, bad options (a time
-  /// step that is not positive and finite, negative damping, friction or stiffness) or planes (a
-  /// normal that is not unit, a non-finite offset). A step that does not converge still moves the
-  /// state to the last Newton iterate (never to non-finite values) and says so in the report.
-  Result<DynamicStepReport> step(const FemModel& model, std::span<const ContactPlane> planes, DynamicState& state);
+  /// Advances `state` by one time step against `obstacles`. Errors (state left as it was): state
+  /// sizes that are not the model's node count, non-finite positions or velocities, bad options (a
+  /// time step that is not positive and finite, negative damping, friction or stiffness) or
+  /// obstacles (a normal that is not unit, a non-finite offset, a convex of fewer than 4 faces). A
+  /// step that does not converge still moves the state to the last Newton iterate (never to
+  /// non-finite values) and says so in the report.
+  Result<DynamicStepReport> step(const FemModel& model, const DynamicObstacles& obstacles, DynamicState& state);
 
   /// Energy of a state, J: kinetic, elastic, gravitational (zero at the origin) and the contact
   /// penalty's. Implicit Euler never makes it grow (for a convex elastic energy; see
   /// docs/dynamics.md).
-  [[nodiscard]] double energy(const FemModel& model, std::span<const ContactPlane> planes,
+  [[nodiscard]] double energy(const FemModel& model, const DynamicObstacles& obstacles,
                               const DynamicState& state) const;
 
  private:

@@ -15,6 +15,30 @@ namespace {
 // f0(y) = y^2 / (2 eps) for y < eps, y - eps / 2 beyond; f0'(y) = min(y / eps, 1).
 double friction_f0(double y, double eps) { return y < eps ? y * y / (2 * eps) : y - eps / 2; }
 
+// A node's contact with obstacle j (planes first, then convexes): how deep it is and the unit
+// normal it is pushed out along; depth <= 0 when it is outside.
+struct Touch {
+  double depth = 0;
+  Vec3 normal = Vec3::Zero();
+};
+Touch touch(const DynamicObstacles& o, std::size_t j, const Vec3& x) {
+  if (j < o.planes.size()) {
+    const ContactPlane& p = o.planes[j];
+    return {p.offset - p.normal.dot(x), p.normal};
+  }
+  Touch t{std::numeric_limits<double>::infinity(), Vec3::Zero()};
+  for (const HalfSpace& f : o.convexes[j - o.planes.size()].faces) {
+    const double d = f.offset - f.normal.dot(x);
+    if (d <= 0) return {0, Vec3::Zero()};  // outside this face: outside the convex
+    if (d < t.depth) t = {d, f.normal};
+  }
+  return t;
+}
+std::size_t obstacle_count(const DynamicObstacles& o) { return o.planes.size() + o.convexes.size(); }
+double obstacle_friction(const DynamicObstacles& o, std::size_t j) {
+  return j < o.planes.size() ? o.planes[j].friction : o.convexes[j - o.planes.size()].friction;
+}
+
 Mat34 corners(const std::vector<Vec3>& x, const TetIndices& t) {
   Mat34 c;
   for (int k = 0; k < 4; ++k) c.col(k) = x[t[k]];
@@ -28,10 +52,12 @@ struct StepData {
   std::vector<Vec3> target;     // x~_i = x_i + h v_i / (1 + alpha h), m
   std::vector<double> penalty;  // k_i, N/m
   std::vector<Vec3> start;      // x at the step's start, m
-  // Lagged friction: per (node, plane) in contact at the start, mu * lambda (N).
+  // Lagged friction: per (node, obstacle) in contact at the start, the tangent plane's normal
+  // there and mu * lambda (N).
   struct Friction {
     Index node;
-    Index plane;
+    Index obstacle;
+    Vec3 normal;
     double mu_lambda;
   };
   std::vector<Friction> friction;
@@ -40,9 +66,9 @@ struct StepData {
 
 class Potential {
  public:
-  Potential(const FemModel& model, std::span<const ContactPlane> planes, const DynamicSolverOptions& options,
+  Potential(const FemModel& model, const DynamicObstacles& obstacles, const DynamicSolverOptions& options,
             const StepData& data)
-      : model_(model), planes_(planes), options_(options), d_(data) {}
+      : model_(model), obstacles_(obstacles), options_(options), d_(data) {}
 
   // E(x), J: every term but the elastic one in node order, then the elastic energy.
   double energy(const std::vector<Vec3>& x) const {
@@ -50,13 +76,13 @@ class Potential {
     const double eps = options_.friction_speed * d_.h;
     for (Index i = 0; i < model_.num_nodes; ++i) {
       e += 0.5 * d_.inertia[i] * (x[i] - d_.target[i]).squaredNorm() - model_.node_mass[i] * options_.gravity.dot(x[i]);
-      for (const ContactPlane& p : planes_) {
-        const double depth = p.offset - p.normal.dot(x[i]);
+      for (std::size_t j = 0; j < obstacle_count(obstacles_); ++j) {
+        const double depth = touch(obstacles_, j, x[i]).depth;
         if (depth > 0) e += 0.5 * d_.penalty[i] * depth * depth;
       }
     }
     for (const auto& f : d_.friction) {
-      const Vec3& n = planes_[f.plane].normal;
+      const Vec3& n = f.normal;
       Vec3 u = x[f.node] - d_.start[f.node];
       u -= n * n.dot(u);
       e += f.mu_lambda * friction_f0(u.norm(), eps);
@@ -73,21 +99,11 @@ class Potential {
   // g = dE/dx, N (#nodes).
   void gradient(const std::vector<Vec3>& x, std::vector<Vec3>& g, ForceWorkspace& workspace) const {
     internal_forces(model_, x, g, workspace);
-    const double eps = options_.friction_speed * d_.h;
     for (Index i = 0; i < model_.num_nodes; ++i) {
       g[i] += d_.inertia[i] * (x[i] - d_.target[i]) - model_.node_mass[i] * options_.gravity;
-      for (const ContactPlane& p : planes_) {
-        const double depth = p.offset - p.normal.dot(x[i]);
-        if (depth > 0) g[i] -= d_.penalty[i] * depth * p.normal;
-      }
+      for (std::size_t j = 0; j < obstacle_count(obstacles_); ++j) g[i] -= contact_force(i, j, x);
     }
-    for (const auto& f : d_.friction) {
-      const Vec3& n = planes_[f.plane].normal;
-      Vec3 u = x[f.node] - d_.start[f.node];
-      u -= n * n.dot(u);
-      const double y = u.norm();
-      if (y > 0) g[f.node] += f.mu_lambda * std::min(y / eps, 1.0) / y * u;
-    }
+    for (const auto& f : d_.friction) g[f.node] -= friction_force(f, x);
     if (!d_.damping.empty())
       for (Index t = 0; t < model_.num_tets(); ++t) {
         const TetIndices& tet = model_.tets[t];
@@ -96,6 +112,20 @@ class Potential {
         const Eigen::Matrix<double, 12, 1> gv = d_.damping[t] * v;
         for (int k = 0; k < 4; ++k) g[tet[k]] += gv.segment<3>(3 * k);
       }
+  }
+
+  // The force obstacle j puts on node i at x (the penalty's), N.
+  Vec3 contact_force(Index i, std::size_t j, const std::vector<Vec3>& x) const {
+    const Touch t = touch(obstacles_, j, x[i]);
+    return t.depth > 0 ? Vec3(d_.penalty[i] * t.depth * t.normal) : Vec3::Zero();
+  }
+  // The friction force on f's node at x, N.
+  Vec3 friction_force(const StepData::Friction& f, const std::vector<Vec3>& x) const {
+    const double eps = options_.friction_speed * d_.h;
+    Vec3 u = x[f.node] - d_.start[f.node];
+    u -= f.normal * f.normal.dot(u);
+    const double y = u.norm();
+    return y > 0 ? Vec3(-f.mu_lambda * std::min(y / eps, 1.0) / y * u) : Vec3::Zero();
   }
 
   // The Hessian (elastic part exact or projected) into `matrix`.
@@ -109,11 +139,13 @@ class Potential {
     std::vector<Mat3> node_block(static_cast<std::size_t>(model_.num_nodes), Mat3::Zero());
     for (Index i = 0; i < model_.num_nodes; ++i) {
       node_block[i] = d_.inertia[i] * Mat3::Identity();
-      for (const ContactPlane& p : planes_)
-        if (p.offset - p.normal.dot(x[i]) > 0) node_block[i] += d_.penalty[i] * p.normal * p.normal.transpose();
+      for (std::size_t j = 0; j < obstacle_count(obstacles_); ++j) {
+        const Touch t = touch(obstacles_, j, x[i]);
+        if (t.depth > 0) node_block[i] += d_.penalty[i] * t.normal * t.normal.transpose();
+      }
     }
     for (const auto& f : d_.friction) {
-      const Vec3& n = planes_[f.plane].normal;
+      const Vec3& n = f.normal;
       const Mat3 tangent = Mat3::Identity() - n * n.transpose();
       Vec3 u = x[f.node] - d_.start[f.node];
       u -= n * n.dot(u);
@@ -136,12 +168,12 @@ class Potential {
 
  private:
   const FemModel& model_;
-  std::span<const ContactPlane> planes_;
+  const DynamicObstacles& obstacles_;
   const DynamicSolverOptions& options_;
   const StepData& d_;
 };
 
-Result<void> check(const FemModel& model, std::span<const ContactPlane> planes, const DynamicSolverOptions& o,
+Result<void> check(const FemModel& model, const DynamicObstacles& obstacles, const DynamicSolverOptions& o,
                    const DynamicState& state) {
   const auto n = static_cast<std::size_t>(model.num_nodes);
   if (state.x.size() != n || state.v.size() != n)
@@ -162,11 +194,21 @@ Result<void> check(const FemModel& model, std::span<const ContactPlane> planes, 
     return make_error("dynamic step: friction_speed must be positive and finite");
   if (o.max_newton_iterations < 1) return make_error("dynamic step: max_newton_iterations must be >= 1");
   if (!(o.velocity_tolerance > 0)) return make_error("dynamic step: velocity_tolerance must be positive");
+  const auto unit = [](const Vec3& normal) { return normal.allFinite() && std::abs(normal.norm() - 1) <= 1e-9; };
+  const auto friction_ok = [](double mu) { return mu >= 0 && std::isfinite(mu); };
+  const auto& planes = obstacles.planes;
   for (std::size_t p = 0; p < planes.size(); ++p)
-    if (!planes[p].normal.allFinite() || std::abs(planes[p].normal.norm() - 1) > 1e-9 ||
-        !std::isfinite(planes[p].offset) || !(planes[p].friction >= 0) || !std::isfinite(planes[p].friction))
+    if (!unit(planes[p].normal) || !std::isfinite(planes[p].offset) || !friction_ok(planes[p].friction))
       return make_error("dynamic step: plane " + std::to_string(p) +
                         " needs a unit normal, a finite offset and a finite friction >= 0");
+  const auto& convexes = obstacles.convexes;
+  for (std::size_t c = 0; c < convexes.size(); ++c) {
+    bool ok = convexes[c].faces.size() >= 4 && friction_ok(convexes[c].friction);
+    for (const HalfSpace& f : convexes[c].faces) ok = ok && unit(f.normal) && std::isfinite(f.offset);
+    if (!ok)
+      return make_error("dynamic step: convex " + std::to_string(c) +
+                        " needs at least 4 faces with unit normals and finite offsets, and a finite friction >= 0");
+  }
   return {};
 }
 
@@ -174,9 +216,9 @@ Result<void> check(const FemModel& model, std::span<const ContactPlane> planes, 
 
 DynamicSolver::DynamicSolver(const DynamicSolverOptions& options) : options_(options), linear_(options.linear) {}
 
-Result<DynamicStepReport> DynamicSolver::step(const FemModel& model, std::span<const ContactPlane> planes,
+Result<DynamicStepReport> DynamicSolver::step(const FemModel& model, const DynamicObstacles& obstacles,
                                               DynamicState& state) {
-  SHATTER_TRY(ok, check(model, planes, options_, state));
+  SHATTER_TRY(ok, check(model, obstacles, options_, state));
   const DynamicSolverOptions& o = options_;
   const Index n = model.num_nodes;
   if (!has_pattern_ || matrix_.num_nodes() != n) {
@@ -195,9 +237,11 @@ Result<DynamicStepReport> DynamicSolver::step(const FemModel& model, std::span<c
     d.inertia[i] = m * (1 / (h * h) + alpha / h);
     d.target[i] = state.x[i] + h * state.v[i] / (1 + alpha * h);
     d.penalty[i] = o.contact_stiffness * m / (h * h);
-    for (Index p = 0; p < static_cast<Index>(planes.size()); ++p) {
-      const double depth = planes[p].offset - planes[p].normal.dot(state.x[i]);
-      if (depth > 0 && planes[p].friction > 0) d.friction.push_back({i, p, planes[p].friction * d.penalty[i] * depth});
+    for (std::size_t j = 0; j < obstacle_count(obstacles); ++j) {
+      const Touch t = touch(obstacles, j, state.x[i]);
+      const double mu = obstacle_friction(obstacles, j);
+      if (t.depth > 0 && mu > 0)
+        d.friction.push_back({i, static_cast<Index>(j), t.normal, mu * d.penalty[i] * t.depth});
     }
   }
   if (o.stiffness_damping > 0) {
@@ -209,7 +253,7 @@ Result<DynamicStepReport> DynamicSolver::step(const FemModel& model, std::span<c
                             true);
     });
   }
-  const Potential potential(model, planes, o, d);
+  const Potential potential(model, obstacles, o, d);
 
   // Nodes in no tet have no stiffness row: they fly freely (inertia and gravity only).
   std::vector<Vec3> x = state.x;
@@ -271,23 +315,41 @@ Result<DynamicStepReport> DynamicSolver::step(const FemModel& model, std::span<c
   }
   if (!report.converged && report.message.empty())
     report.message = "no convergence in " + std::to_string(o.max_newton_iterations) + " Newton iterations";
+  // What the body pushed each convex with: minus the forces on the nodes, times h.
+  const std::size_t first_convex = obstacles.planes.size();
+  report.convex_impulse.assign(obstacles.convexes.size(), Vec3::Zero());
+  report.convex_moment.assign(obstacles.convexes.size(), Vec3::Zero());
   for (Index i = 0; i < n; ++i) {
     state.v[i] = (x[i] - state.x[i]) / h;
-    for (const ContactPlane& p : planes) report.contacts += p.offset - p.normal.dot(x[i]) > 0 ? 1 : 0;
+    for (std::size_t j = 0; j < obstacle_count(obstacles); ++j) {
+      const Vec3 f = potential.contact_force(i, j, x);
+      if (f.isZero(0)) continue;
+      ++report.contacts;
+      if (j >= first_convex) {
+        report.convex_impulse[j - first_convex] -= h * f;
+        report.convex_moment[j - first_convex] -= h * x[i].cross(f);
+      }
+    }
   }
+  for (const auto& f : d.friction)
+    if (static_cast<std::size_t>(f.obstacle) >= first_convex) {
+      const Vec3 force = potential.friction_force(f, x);
+      report.convex_impulse[f.obstacle - first_convex] -= h * force;
+      report.convex_moment[f.obstacle - first_convex] -= h * x[f.node].cross(force);
+    }
   state.x.swap(x);
   return report;
 }
 
-double DynamicSolver::energy(const FemModel& model, std::span<const ContactPlane> planes,
+double DynamicSolver::energy(const FemModel& model, const DynamicObstacles& obstacles,
                              const DynamicState& state) const {
   const double h = options_.time_step;
   double e = total_energy(model, state.x);
   for (Index i = 0; i < model.num_nodes; ++i) {
     const double m = model.node_mass[i];
     e += 0.5 * m * state.v[i].squaredNorm() - m * options_.gravity.dot(state.x[i]);
-    for (const ContactPlane& p : planes) {
-      const double depth = p.offset - p.normal.dot(state.x[i]);
+    for (std::size_t j = 0; j < obstacle_count(obstacles); ++j) {
+      const double depth = touch(obstacles, j, state.x[i]).depth;
       if (depth > 0) e += 0.5 * options_.contact_stiffness * m / (h * h) * depth * depth;
     }
   }
