@@ -570,21 +570,24 @@ TEST(Impacts, PressDentsClayWhileHeld) {
     World w({.gravity = Vec3::Zero()});
     auto id = w.add_body(teddy, {.impact = clay});
     ASSERT_OK(id);
-    // Press the front-most point backwards with 150 N on a 2 cm pad; an equal force on the back-most
-    // point keeps it in place.
+    // Press the front-most point backwards with 50 N on a 2 cm pad; an equal force on the back-most
+    // point keeps it in place. The load is well below tearing (the largest plastic strain stays a
+    // fraction of max_plastic_strain), so round-off cannot decide the outcome.
     const BodySurface surf = w.surface(*id);
     Vec3 front = surf.positions[0], back = surf.positions[0];
     for (const Vec3& p : surf.positions) {
       if (p.z() > front.z()) front = p;
       if (p.z() < back.z()) back = p;
     }
-    ASSERT_OK(w.press(*id, front, Vec3(0, 0, -150), 0.02, seconds));
-    ASSERT_OK(w.press(*id, back, Vec3(0, 0, 150), 0.02, seconds));
+    const double force = 50;
+    ASSERT_OK(w.press(*id, front, Vec3(0, 0, -force), 0.02, seconds));
+    ASSERT_OK(w.press(*id, back, Vec3(0, 0, force), 0.02, seconds));
     for (int i = 0; i < 20; ++i) w.step();
-    double strain = 0;
-    for (const double e : w.plastic_strain(*id)) strain += e;
-    std::printf("press held %.2f s: plastic strain sum %.4g\n", seconds, strain);
+    double strain = 0, peak = 0;
+    for (const double e : w.plastic_strain(*id)) strain += e, peak = std::max(peak, e);
+    std::printf("press held %.2f s: plastic strain sum %.4g, largest %.3g\n", seconds, strain, peak);
     EXPECT_GT(strain, last);
+    EXPECT_LT(peak, 0.5 * clay->fracture.plasticity.max_plastic_strain);
     EXPECT_FALSE(w.removed(*id));
     last = strain;
   }
