@@ -16,6 +16,14 @@ Quat cayley_step(const Vec3& w, double dt) {
   return Quat(1.0, b.x(), b.y(), b.z()).normalized();
 }
 
+// The same rotation applied to v without forming the unit quaternion (no square root): with
+// q = (1, b) / |(1, b)|, q v q* = v + 2 / (1 + b.b) (b x v + b x (b x v)).
+Vec3 cayley_rotate(const Vec3& w, double dt, const Vec3& v) {
+  const Vec3 b = -0.5 * dt * w;
+  const Vec3 bv = b.cross(v);
+  return v + (2.0 / (1.0 + b.squaredNorm())) * (bv + b.cross(bv));
+}
+
 // Body-frame midpoint angular velocity of the torque-free step: the fixed point of
 // w = I_b^-1 (L_b + Q(w) L_b) / 2. Returns false when it does not converge (a step too large for
 // the spin; the caller splits it).
@@ -24,7 +32,7 @@ bool midpoint_velocity(const Mat3& inverse_inertia, const Vec3& l_body, double d
   const Vec3 w0 = inverse_inertia * l_body;
   w = inverse_inertia * (l_body + (0.5 * dt) * l_body.cross(w0));
   for (int it = 0; it < 200; ++it) {
-    const Vec3 next = inverse_inertia * (0.5 * (l_body + cayley_step(w, dt) * l_body));
+    const Vec3 next = inverse_inertia * (0.5 * (l_body + cayley_rotate(w, dt, l_body)));
     const double change = (next - w).norm();
     w = next;
     if (change <= 4 * std::numeric_limits<double>::epsilon() * w.norm()) return true;
