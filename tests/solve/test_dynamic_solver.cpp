@@ -200,6 +200,28 @@ TEST(DynamicSolver, SameBitsOnAnyThreadCount) {
   EXPECT_EQ(one.final.v, two.final.v);
 }
 
+// One solver stepping two models with the same nodes but other tets (the pattern is rebuilt):
+// the same bits as a solver of its own.
+TEST(DynamicSolver, ANewModelGetsItsOwnPattern) {
+  const Cube six = soft_cube(0.3, 0.4);
+  TetMesh five_mesh =
+      make_box_mesh({.max = Vec3(0.2, 0.2, 0.2), .cells = {4, 4, 4}, .pattern = BoxMeshDef::Pattern::five});
+  ASSERT_EQ(five_mesh.positions.size(), six.state.x.size());
+  ASSERT_NE(five_mesh.tets, six.model.tets);
+  for (std::size_t i = 0; i < five_mesh.positions.size(); ++i) five_mesh.positions[i] = six.state.x[i];
+  const FemModel five = make_fem_model(five_mesh, six.model.material, ModelKind::stvk);
+  const DynamicObstacles planes = ground(false);
+  DynamicSolver shared, own;
+  DynamicState a = six.state;
+  for (int k = 0; k < 20; ++k) ASSERT_TRUE(shared.step(six.model, planes, a).ok());
+  DynamicState c = a;
+  for (int k = 0; k < 20; ++k) {
+    ASSERT_TRUE(shared.step(five, planes, a).ok());
+    ASSERT_TRUE(own.step(five, planes, c).ok());
+  }
+  EXPECT_EQ(a.x, c.x);
+}
+
 TEST(DynamicSolver, BadInputIsAnErrorAndLeavesTheState) {
   Cube c = soft_cube(0.3, 0.0);
   const DynamicState before = c.state;

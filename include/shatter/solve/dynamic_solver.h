@@ -89,7 +89,8 @@ struct DynamicStepReport {
   std::string message;  ///< why it did not converge ("" when it did)
 };
 
-/// Steps one FEM body; keeps the stiffness pattern and the linear solver's analysis between steps.
+/// Steps one FEM body; keeps the stiffness pattern and the linear solver's analysis between steps
+/// (rebuilt when the model's tets change).
 class DynamicSolver {
  public:
   /// A solver with `options` (checked at each step).
@@ -115,7 +116,7 @@ class DynamicSolver {
  private:
   DynamicSolverOptions options_;
   BlockSparseMatrix matrix_;
-  bool has_pattern_ = false;
+  std::vector<TetIndices> pattern_tets_;  ///< the tets matrix_'s pattern was built for
   LinearSolver linear_;
   ForceWorkspace workspace_;
 };

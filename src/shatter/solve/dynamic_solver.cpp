@@ -60,6 +60,11 @@ struct StepData {
     Vec3 normal;
     double mu_lambda;
   };
+  // The node's tangential move over the step, m.
+  [[nodiscard]] Vec3 slip(const Friction& f, const std::vector<Vec3>& x) const {
+    const Vec3 u = x[f.node] - start[f.node];
+    return u - f.normal * f.normal.dot(u);
+  }
   std::vector<Friction> friction;
   std::vector<Mat12> damping;  // beta/h K_e at the start (projected), per tet; empty when beta = 0
 };
@@ -81,12 +86,7 @@ class Potential {
         if (depth > 0) e += 0.5 * d_.penalty[i] * depth * depth;
       }
     }
-    for (const auto& f : d_.friction) {
-      const Vec3& n = f.normal;
-      Vec3 u = x[f.node] - d_.start[f.node];
-      u -= n * n.dot(u);
-      e += f.mu_lambda * friction_f0(u.norm(), eps);
-    }
+    for (const auto& f : d_.friction) e += f.mu_lambda * friction_f0(d_.slip(f, x).norm(), eps);
     if (!d_.damping.empty())
       for (Index t = 0; t < model_.num_tets(); ++t) {
         const Mat34 du = corners(x, model_.tets[t]) - corners(d_.start, model_.tets[t]);
@@ -122,8 +122,7 @@ class Potential {
   // The friction force on f's node at x, N.
   Vec3 friction_force(const StepData::Friction& f, const std::vector<Vec3>& x) const {
     const double eps = options_.friction_speed * d_.h;
-    Vec3 u = x[f.node] - d_.start[f.node];
-    u -= f.normal * f.normal.dot(u);
+    const Vec3 u = d_.slip(f, x);
     const double y = u.norm();
     return y > 0 ? Vec3(-f.mu_lambda * std::min(y / eps, 1.0) / y * u) : Vec3::Zero();
   }
@@ -145,10 +144,8 @@ class Potential {
       }
     }
     for (const auto& f : d_.friction) {
-      const Vec3& n = f.normal;
-      const Mat3 tangent = Mat3::Identity() - n * n.transpose();
-      Vec3 u = x[f.node] - d_.start[f.node];
-      u -= n * n.dot(u);
+      const Mat3 tangent = Mat3::Identity() - f.normal * f.normal.transpose();
+      const Vec3 u = d_.slip(f, x);
       const double y = u.norm();
       if (y < eps) {
         node_block[f.node] += f.mu_lambda / eps * tangent;
@@ -221,9 +218,9 @@ Result<DynamicStepReport> DynamicSolver::step(const FemModel& model, const Dynam
   SHATTER_TRY(ok, check(model, obstacles, options_, state));
   const DynamicSolverOptions& o = options_;
   const Index n = model.num_nodes;
-  if (!has_pattern_ || matrix_.num_nodes() != n) {
+  if (matrix_.num_nodes() != n || pattern_tets_ != model.tets) {
     matrix_ = BlockSparseMatrix(n, model.tets, {});
-    has_pattern_ = true;
+    pattern_tets_ = model.tets;
   }
   StepData d;
   d.h = o.time_step;
