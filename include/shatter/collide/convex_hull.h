@@ -62,7 +62,8 @@ Result<ConvexHull> build_convex_hull(std::span<const Vec3> points, const HullOpt
 
 /// Volume of the hull of `points`, m^3, from the triangle stage of build_convex_hull alone (no
 /// faces merged, no structure kept): for callers that only compare volumes, at about half the
-/// cost. Agrees with build_convex_hull's volume to round-off. Errors: as build_convex_hull.
+/// cost. Agrees with build_convex_hull's volume to the faces it merges within the tolerance (at
+/// most the tolerance times the surface area). Errors: as build_convex_hull.
 Result<double> convex_hull_volume(std::span<const Vec3> points, const HullOptions& options = {});
 
 /// Checks a hull's structure and convexity (for tests and debug builds): twins and face loops

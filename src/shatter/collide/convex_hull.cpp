@@ -675,7 +675,8 @@ Result<double> convex_hull_volume(std::span<const Vec3> points, const HullOption
   SHATTER_TRY(tol, hull_tolerance(points, options));
   TriangleHull tri_hull(points, *tol);
   SHATTER_TRY(built, tri_hull.build());
-  // Sum of the tets from a point inside (the first point of the initial simplex) to each triangle.
+  // Sum of the signed tets from a corner of the initial simplex to each triangle (the surface is
+  // closed, so the sum does not depend on that point).
   double volume = 0;
   const Vec3& o = points[tri_hull.triangles().front().v[0]];
   for (const auto& tri : tri_hull.triangles())
