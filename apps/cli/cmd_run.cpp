@@ -91,8 +91,8 @@ int run(const RunArgs& args) {
     std::printf("impacts     %d analysed, %d crack(s), %d fragment(s) born, %.3g kg of debris\n",
                 static_cast<int>(s.impacts), static_cast<int>(s.cracks), static_cast<int>(s.fragments), s.debris_mass);
     std::printf("bodies      %d at the end\n", static_cast<int>(s.bodies));
-    std::printf("time        %.0f ms wall: rigid %.0f, impacts %.0f, output %.0f\n", s.wall_ms, s.rigid_ms, s.impact_ms,
-                s.output_ms);
+    std::printf("time        %.0f ms wall: rigid %.0f, impacts %.0f, deformable %.0f, output %.0f\n", s.wall_ms,
+                s.rigid_ms, s.impact_ms, s.deformable_ms, s.output_ms);
     std::printf("state hash  %016llx\n", static_cast<unsigned long long>(s.state_hash));
     for (const std::string& f : s.files) std::printf("wrote       %s\n", f.c_str());
     if (!s.files.empty())

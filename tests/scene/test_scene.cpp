@@ -78,6 +78,12 @@ TEST(SceneFile, EveryMistakeIsNamed) {
       {scene_text("", R"(, "heigth": 1)"), "did you mean \"height\""},
       {scene_text("", R"(, "friction": -1)"), "bodies[0].friction"},
       {scene_text("", R"(, "impact": {"max_fragments": 0})"), "bodies[0].impact.max_fragments"},
+      {scene_text("", R"(, "deformable": "yes")"), "bodies[0].deformable: expected true, false or an object"},
+      {scene_text("", R"(, "deformable": {"substeps": 0})"), "bodies[0].deformable.substeps: expected an integer"},
+      {scene_text("", R"(, "deformable": {"stiffness_damping": -1})"), "bodies[0].deformable.stiffness_damping"},
+      {scene_text("", R"(, "deformable": {"damping": 1})"), "bodies[0].deformable.damping: unknown key"},
+      {scene_text("", R"(, "type": "static", "deformable": true)"),
+       "bodies[0].deformable: only a dynamic body can be deformable"},
       {scene_text(R"("actions": [{"time": 0, "type": "strike", "body": "vsae", "impulse": [1, 0, 0], "speed": 1}],)"),
        "actions[0].body: no body is named \"vsae\""},
       {scene_text(R"("actions": [{"time": 0, "type": "strike", "body": "vase", "impulse": [1, 0, 0]}],)"),
@@ -284,6 +290,35 @@ TEST(SceneRun, CliRunsTheBundledVaseDrop) {
 
 namespace shatter {
 namespace {
+
+// The bundled soft landing: the vase dropped on stone breaks, the one dropped on the deformable
+// rubber mat does not, and the rubber ball bounces.
+TEST(SceneRun, ARubberMatCushionsAVaseAndABallBounces) {
+  auto scene = read_scene(std::string(SHATTER_SOURCE_DIR) + "/scenes/soft_landing.json");
+  ASSERT_OK(scene);
+  auto built = build_scene(*scene);
+  ASSERT_OK(built);
+  World& w = *built->world;
+  const BodyId mat = built->bodies[0], on_stone = built->bodies[1], on_rubber = built->bodies[2],
+               ball = built->bodies[3];
+  EXPECT_TRUE(w.deformable(mat));
+  EXPECT_TRUE(w.deformable(ball));
+  EXPECT_FALSE(w.deformable(on_rubber));
+  bool landed = false;
+  double rebound = 0;
+  while (w.time() < 1.0) {
+    w.step();
+    double lowest = kInfinity;
+    for (const Vec3& x : w.node_positions(ball)) lowest = std::min(lowest, x.y());
+    if (lowest < 0.01) landed = true;
+    if (landed) rebound = std::max(rebound, lowest);
+  }
+  EXPECT_TRUE(w.removed(on_stone));
+  EXPECT_FALSE(w.removed(on_rubber));
+  EXPECT_EQ(w.model(on_rubber)->mesh.num_tets(), 1440);
+  EXPECT_TRUE(landed);
+  EXPECT_GT(rebound, 0.05);  // bounced at least 5 cm clear of the ground after landing from 0.8 m
+}
 
 TEST(SceneRun, ABodyAppearsWhenItsTimeComes) {
   const std::string text = R"({

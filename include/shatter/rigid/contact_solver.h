@@ -101,6 +101,8 @@ struct ContactConstraint {
   double twist_impulse = 0;                                    ///< accumulated, about the normal, N m s
   /// Friction applied on B during the step, over all substeps and passes, world, N s.
   Vec3 total_friction_impulse = Vec3::Zero();
+  /// Twist applied on B about the normal during the step, N m s (A takes the opposite).
+  double total_twist_impulse = 0;
 };
 
 /// Settings of the solver.

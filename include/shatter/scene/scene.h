@@ -42,6 +42,8 @@ struct SceneBody {
   SurfaceMaterial surface;
   bool breakable = true;
   ImpactSettings impact;  ///< the scene's impact settings with this body's overrides
+  /// Full FEM dynamics (BodyDef::deformable); empty: rigid between impacts.
+  std::optional<DeformableSettings> deformable;
   /// The body enters the world at this time, s, as placed (a drop or a throw later in the run);
   /// 0: from the start.
   double appear = 0;
@@ -137,10 +139,11 @@ struct RunSummary {
   Index fragments = 0;        ///< bodies born from fractures over the run
   Index impacts = 0;          ///< impact analyses
   Index cracks = 0;
-  double debris_mass = 0;  ///< kg
-  double rigid_ms = 0;     ///< broad + narrow phase + solver, ms over the run
-  double impact_ms = 0;    ///< impact analyses and replacements, ms
-  double output_ms = 0;    ///< writing files, ms
+  double debris_mass = 0;    ///< kg
+  double rigid_ms = 0;       ///< broad + narrow phase + solver, ms over the run
+  double impact_ms = 0;      ///< impact analyses and replacements, ms
+  double deformable_ms = 0;  ///< FEM steps of deformable bodies, ms
+  double output_ms = 0;      ///< writing files, ms
   double wall_ms = 0;
   std::uint64_t state_hash = 0;    ///< World::state_hash at the end
   std::vector<std::string> files;  ///< outputs written

@@ -16,6 +16,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -30,6 +31,7 @@
 #include "shatter/rigid/contact_solver.h"
 #include "shatter/rigid/impact.h"
 #include "shatter/rigid/integrate.h"
+#include "shatter/solve/dynamic_solver.h"
 
 namespace shatter {
 
@@ -69,6 +71,22 @@ struct SurfaceMaterial {
   double restitution = 0.0;  ///< coefficient of restitution, 0..1
 };
 
+/// Full FEM dynamics for one body (docs/dynamics.md): its nodes move by implicit Euler (the paper's
+/// eq. 18-20) instead of rigidly, so it bends, squashes and rings. For soft or small bodies; impacts
+/// neither dent nor break it. Ground, static and kinematic bodies push its nodes (penalty contact
+/// with friction); with other dynamic bodies it exchanges impulses through the contact solver, where
+/// it takes part as a rigid body of its own mass at its best-fit pose (docs/dynamics.md, "In a
+/// world").
+struct DeformableSettings {
+  double mass_damping = 0;         ///< Rayleigh alpha, 1/s (also slows free flight)
+  double stiffness_damping = 0;    ///< Rayleigh beta, s
+  double contact_stiffness = 1e4;  ///< penalty of its node contacts (DynamicSolverOptions::contact_stiffness)
+  int max_newton_iterations = 50;  ///< per step
+  /// FEM steps per world step. Implicit Euler damps what it cannot resolve: a rubber ball landing
+  /// in a contact shorter than the step does not bounce; more substeps let it (docs/dynamics.md).
+  int substeps = 1;
+};
+
 /// Everything to create a body besides its shape.
 struct BodyDef {
   BodyType type = BodyType::dynamic;
@@ -81,6 +99,9 @@ struct BodyDef {
   bool breakable = true;
   /// Impact settings of this body (and of the fragments it breaks into); null: the world's.
   std::shared_ptr<const ImpactSettings> impact;
+  /// Simulate this dynamic tet body with full FEM dynamics (not breakable then); empty: rigid
+  /// between impacts, the paper's hybrid scheme.
+  std::optional<DeformableSettings> deformable;
 };
 
 /// Settings of a world.
@@ -208,8 +229,11 @@ struct StepStats {
   double broad_phase_ms = 0;  ///< wall time of each part
   double narrow_phase_ms = 0;
   double solver_ms = 0;
-  double impact_ms = 0;      ///< impact analyses and body replacement
-  std::int64_t impacts = 0;  ///< bodies analysed
+  double impact_ms = 0;                           ///< impact analyses and body replacement
+  std::int64_t impacts = 0;                       ///< bodies analysed
+  double deformable_ms = 0;                       ///< FEM steps of deformable bodies
+  std::int64_t deformable_newton_iterations = 0;  ///< summed over the deformable bodies
+  std::int64_t deformable_unconverged = 0;        ///< deformable bodies whose step did not converge
 };
 
 class World {
@@ -245,8 +269,15 @@ class World {
   [[nodiscard]] BodyType body_type(BodyId id) const { return body(id).type; }
   [[nodiscard]] const RigidState& rigid_state(BodyId id) const { return body(id).rigid; }
   [[nodiscard]] const RigidInertia& inertia(BodyId id) const { return body(id).inertia; }
-  /// The tet model of a body (null for planes and hulls).
+  /// The tet model of a body (null for planes and hulls). For a deformable body its mesh and
+  /// surface positions are the current deformed shape in the body frame (world x = position +
+  /// R(orientation) r, with the best-fit pose); its `fem` part keeps the rest state.
   [[nodiscard]] const BodyModel* model(BodyId id) const { return body(id).model.get(); }
+  /// Whether the body is simulated with full FEM dynamics (BodyDef::deformable).
+  [[nodiscard]] bool deformable(BodyId id) const { return body(id).deform.has_value(); }
+  /// World node positions (m) and velocities (m/s) of a deformable body (empty for others).
+  [[nodiscard]] std::span<const Vec3> node_positions(BodyId id) const;
+  [[nodiscard]] std::span<const Vec3> node_velocities(BodyId id) const;
   /// The convex pieces of a body (body frame).
   [[nodiscard]] std::span<const ConvexHull> pieces(BodyId id) const;
   /// The plane of a plane body (world), null for other bodies.
@@ -255,11 +286,12 @@ class World {
     return b.shape && b.shape->is_plane ? &b.shape->plane : nullptr;
   }
   [[nodiscard]] bool awake(BodyId id) const { return body(id).awake; }
-  /// Set pose and velocities (wakes the body). Errors: an invalid or removed id, a non-finite
-  /// state.
+  /// Set pose and velocities (wakes the body). A deformable body moves rigidly to the new pose,
+  /// keeping its deformation, and its nodes take the rigid motion's velocities. Errors: an invalid
+  /// or removed id, a non-finite state.
   Result<void> set_rigid_state(BodyId id, const RigidState& rigid);
   /// An impulse J (N s) at world point p (wakes the body; nothing for static and kinematic
-  /// bodies). Errors: an invalid or removed id, non-finite values.
+  /// bodies; a deformable body takes it on its nodes near p). Errors: an invalid or removed id, non-finite values.
   Result<void> apply_impulse(BodyId id, const Vec3& impulse, const Vec3& point);
   /// Wake a body (its island follows at the next step). Errors: an invalid or removed id.
   Result<void> wake(BodyId id);
@@ -377,6 +409,20 @@ class World {
     std::vector<double> display_stress;    ///< per tet of model under the last load, Pa (display only)
     std::vector<double> principal_stress;  ///< per tet under the last load, Pa (display only)
     std::shared_ptr<StaticSolver> solver;  ///< kept between impacts
+    /// Full FEM dynamics (BodyDef::deformable). `model` is then the body's own copy, its positions
+    /// kept at the deformed shape (copied before a change while a snapshot shares it).
+    struct Deformation {
+      DynamicSolverOptions options;  ///< time_step: the world's over substeps
+      int substeps = 1;
+      std::shared_ptr<BodyModel> model;               ///< the body's model (Body::model)
+      DynamicState nodes;                             ///< world
+      std::shared_ptr<const std::vector<Vec3>> rest;  ///< rest node positions, body frame
+      std::shared_ptr<DynamicSolver> solver;          ///< pattern cache, kept between steps
+      double patch_radius = 0;  ///< contact impulses are spread over the surface nodes this close, m
+      double max_speed = 0;     ///< fastest node, m/s
+      Aabb box;                 ///< around the nodes, world
+    };
+    std::optional<Deformation> deform;
   };
   struct PairRef {
     Index a, b;
@@ -422,6 +468,17 @@ class World {
   void update_islands_and_wake();
   void solve();
   void update_sleep();
+  /// One FEM step of every awake deformable body, after the contact solver.
+  void step_deformables();
+  /// Obstacles of a deformable body's nodes: planes, static and kinematic bodies near it.
+  [[nodiscard]] DynamicObstacles deformable_obstacles(Index slot) const;
+  /// Add impulse J at world point p to a deformable body's nodes near p (and the moment it lacks
+  /// to the whole body), so that their momentum changes by exactly J and (p - c) x J.
+  void push_nodes(Index slot, const Vec3& impulse, const Vec3& point);
+  /// Turn a deformable body's nodes rigidly so that their angular momentum changes by H (N m s).
+  void turn_nodes(Index slot, const Vec3& moment);
+  /// Pose, velocities and box of a deformable body from its nodes; its model's positions follow.
+  void fit_deformable(Index slot);
   [[nodiscard]] bool pair_excluded(Index a, Index b) const;
 
   WorldSettings settings_;

@@ -117,6 +117,7 @@ void prepare_contact(ContactConstraint& c, std::span<const SolverBody> bodies, d
   const double kw = c.normal.dot(c.twist_a) + c.normal.dot(c.twist_b);
   c.twist_mass = kw > 0 ? 1.0 / kw : 0.0;
   c.total_friction_impulse.setZero();
+  c.total_twist_impulse = 0;
 }
 
 void warm_start_contact(ContactConstraint& c, std::span<SolverBody> bodies) {
@@ -129,6 +130,7 @@ void warm_start_contact(ContactConstraint& c, std::span<SolverBody> bodies) {
   }
   apply_friction(c, a, b, c.friction_impulse);
   apply_twist(c, a, b, c.twist_impulse);
+  c.total_twist_impulse += c.twist_impulse;
   c.total_friction_impulse += c.friction_impulse.x() * c.tangents[0] + c.friction_impulse.y() * c.tangents[1];
 }
 
@@ -172,6 +174,7 @@ void solve_contact(ContactConstraint& c, std::span<SolverBody> bodies, double in
     const double limit = c.friction * twist_limit;
     const double next = std::clamp(c.twist_impulse - c.twist_mass * spin, -limit, limit);
     apply_twist(c, a, b, next - c.twist_impulse);
+    c.total_twist_impulse += next - c.twist_impulse;
     c.twist_impulse = next;
   }
   // Coulomb friction at the centre, the tangent impulse clamped to the friction disc.

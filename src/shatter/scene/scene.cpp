@@ -107,6 +107,39 @@ Result<ImpactSettings> read_impact(const Json& value, const Where& where, Impact
   return base;
 }
 
+// A body's "deformable": true, false, or an object of DeformableSettings keys.
+Result<std::optional<DeformableSettings>> read_deformable(const Json& value, const Where& where) {
+  if (value.is_boolean()) return value.get<bool>() ? std::optional(DeformableSettings{}) : std::nullopt;
+  ObjectReader r(value, where);
+  if (!r.status().ok())
+    return where.error("expected true, false or an object of deformable settings, got " + json_input::type_name(value));
+  DeformableSettings d;
+  if (const Json* j = r.get("mass_damping")) {
+    SHATTER_TRY(v, read_in_range(*j, where.key("mass_damping"), 0, 1e6, "a Rayleigh alpha >= 0 (1/s)"));
+    d.mass_damping = *v;
+  }
+  if (const Json* j = r.get("stiffness_damping")) {
+    SHATTER_TRY(v, read_in_range(*j, where.key("stiffness_damping"), 0, 1e3, "a Rayleigh beta in [0, 1000] (s)"));
+    d.stiffness_damping = *v;
+  }
+  if (const Json* j = r.get("contact_stiffness")) {
+    SHATTER_TRY(v, read_in_range(*j, where.key("contact_stiffness"), 1, 1e12, "a factor in [1, 1e12]"));
+    d.contact_stiffness = *v;
+  }
+  if (const Json* j = r.get("max_newton_iterations")) {
+    SHATTER_TRY(v, json_input::read_integer(*j, where.key("max_newton_iterations")));
+    if (*v < 1 || *v > 1000) return where.key("max_newton_iterations").error("expected an integer in [1, 1000]");
+    d.max_newton_iterations = static_cast<int>(*v);
+  }
+  if (const Json* j = r.get("substeps")) {
+    SHATTER_TRY(v, json_input::read_integer(*j, where.key("substeps")));
+    if (*v < 1 || *v > 1000) return where.key("substeps").error("expected an integer in [1, 1000]");
+    d.substeps = static_cast<int>(*v);
+  }
+  SHATTER_TRY(done, r.finish());
+  return std::optional(d);
+}
+
 Result<SurfaceMaterial> read_surface(ObjectReader& r, const Where& where, SurfaceMaterial s) {
   if (const Json* j = r.get("friction")) {
     SHATTER_TRY(v, read_in_range(*j, where.key("friction"), 0, 100, "a friction coefficient >= 0"));
@@ -134,7 +167,7 @@ Result<SceneBody> read_body(const Json& value, const Where& where, const Scene& 
   b.impact = scene.world.impact;
   for (const char* key :
        {"name", "mesh", "shape", "refine", "material", "model", "type", "position", "rotation", "height", "velocity",
-        "angular_velocity", "friction", "restitution", "breakable", "impact", "array", "appear"})
+        "angular_velocity", "friction", "restitution", "breakable", "impact", "deformable", "array", "appear"})
     (void)r.get(key);
   SHATTER_TRY(known, r.finish());
   if (const Json* j = r.get("name")) {
@@ -218,6 +251,12 @@ Result<SceneBody> read_body(const Json& value, const Where& where, const Scene& 
   if (const Json* j = r.get("impact")) {
     SHATTER_TRY(v, read_impact(*j, where.key("impact"), b.impact));
     b.impact = *v;
+  }
+  if (const Json* j = r.get("deformable")) {
+    SHATTER_TRY(v, read_deformable(*j, where.key("deformable")));
+    if (*v && b.type != BodyType::dynamic)
+      return where.key("deformable").error("only a dynamic body can be deformable");
+    b.deformable = *v;
   }
   if (const Json* j = r.get("appear")) {
     SHATTER_TRY(v, read_in_range(*j, where.key("appear"), 0, kMaxDuration, "a time >= 0 (s)"));
@@ -560,8 +599,9 @@ Result<SceneWorld> build_scene(const Scene& scene) {
     BodyDef def{.type = b.type,
                 .rigid = rigid,
                 .surface = b.surface,
-                .breakable = b.breakable,
-                .impact = std::make_shared<const ImpactSettings>(b.impact)};
+                .breakable = b.breakable && !b.deformable,
+                .impact = std::make_shared<const ImpactSettings>(b.impact),
+                .deformable = b.deformable};
     auto shared = std::make_shared<const BodyModel>(std::move(*model));
     if (b.appear > 0) {  // added by apply_due_actions when its time comes
       out.bodies.push_back(BodyId{});
@@ -842,6 +882,7 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
     const StepStats& st = w.stats();
     s.rigid_ms += st.broad_phase_ms + st.narrow_phase_ms + st.solver_ms;
     s.impact_ms += st.impact_ms;
+    s.deformable_ms += st.deformable_ms;
     const StepEvents& ev = w.events();
     s.impacts += static_cast<Index>(ev.impacts.size());
     s.cracks += static_cast<Index>(ev.cracks.size());
@@ -889,22 +930,25 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
                            Json::array({r.orientation.w(), r.orientation.x(), r.orientation.y(), r.orientation.z()})}});
       }
       s.wall_ms = ms_since(t_start);
-      const Json summary{
-          {"scene", scene.name},
-          {"file", scene.file},
-          {"steps", s.steps},
-          {"simulated_time", s.simulated_time},
-          {"stopped", s.stopped},
-          {"bodies", bodies},
-          {"live_bodies", s.bodies},
-          {"fragments_born", s.fragments},
-          {"impacts", s.impacts},
-          {"cracks", s.cracks},
-          {"debris_mass", s.debris_mass},
-          {"frames", frame_count},
-          {"timings_ms",
-           {{"rigid", s.rigid_ms}, {"impacts", s.impact_ms}, {"output", s.output_ms}, {"wall", s.wall_ms}}},
-          {"state_hash", hex64(s.state_hash)}};
+      const Json summary{{"scene", scene.name},
+                         {"file", scene.file},
+                         {"steps", s.steps},
+                         {"simulated_time", s.simulated_time},
+                         {"stopped", s.stopped},
+                         {"bodies", bodies},
+                         {"live_bodies", s.bodies},
+                         {"fragments_born", s.fragments},
+                         {"impacts", s.impacts},
+                         {"cracks", s.cracks},
+                         {"debris_mass", s.debris_mass},
+                         {"frames", frame_count},
+                         {"timings_ms",
+                          {{"rigid", s.rigid_ms},
+                           {"impacts", s.impact_ms},
+                           {"deformable", s.deformable_ms},
+                           {"output", s.output_ms},
+                           {"wall", s.wall_ms}}},
+                         {"state_hash", hex64(s.state_hash)}};
       SHATTER_TRY(ok, write_file_atomic(out + "/summary.json", summary.dump(2) + "\n"));
       s.files.push_back(out + "/summary.json");
     }

@@ -15,6 +15,7 @@
 #include "shatter/core/hash.h"
 #include "shatter/core/log.h"
 #include "shatter/core/parallel.h"
+#include "shatter/fem/constitutive.h"
 
 namespace shatter {
 namespace {
@@ -120,6 +121,43 @@ Index World::add(const BodyDef& def, std::shared_ptr<const Shape> shape, std::sh
     body.rigid.angular_velocity.setZero();
     body.awake = false;
   }
+  if (def.deformable && body.model && body.type == BodyType::dynamic) {
+    const DeformableSettings& ds = *def.deformable;
+    Body::Deformation d;
+    d.substeps = ds.substeps;
+    d.options = {.time_step = settings_.time_step / ds.substeps,
+                 .gravity = settings_.gravity,
+                 .mass_damping = ds.mass_damping,
+                 .stiffness_damping = ds.stiffness_damping,
+                 .contact_stiffness = ds.contact_stiffness,
+                 .max_newton_iterations = ds.max_newton_iterations};
+    d.model = std::make_shared<BodyModel>(*body.model);
+    d.rest = std::make_shared<const std::vector<Vec3>>(body.model->mesh.positions);
+    d.solver = std::make_shared<DynamicSolver>(d.options);
+    const Mat3 R = body.rigid.orientation.toRotationMatrix();
+    for (const Vec3& r : *d.rest) {
+      d.nodes.x.emplace_back(body.rigid.position + R * r);
+      d.nodes.v.emplace_back(body.rigid.linear_velocity + body.rigid.angular_velocity.cross(R * r));
+    }
+    // Contact impulses are spread over about two surface edges around their point.
+    const TriSurface& surf = body.model->surface;
+    double edges = 0;
+    for (const TriIndices& t : surf.triangles)
+      for (int k = 0; k < 3; ++k) edges += (surf.positions[t[k]] - surf.positions[t[(k + 1) % 3]]).norm();
+    d.patch_radius = surf.triangles.empty() ? 0 : 2 * edges / (3 * static_cast<double>(surf.triangles.size()));
+    // The contact solver sees it as a rigid body with the nodes' mass distribution.
+    Mat3 inertia = Mat3::Zero();
+    for (std::size_t i = 0; i < d.rest->size(); ++i) {
+      const Vec3& r = (*d.rest)[i];
+      inertia += body.model->fem.node_mass[i] * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+    }
+    body.inertia.inertia_body = inertia;
+    body.inertia.inverse_inertia_body = inertia.inverse();
+    body.model = d.model;
+    body.breakable = false;
+    body.solver.reset();
+    body.deform = std::move(d);
+  }
   // A slot that restore() freed gets a new generation, so ids of the body it held are stale.
   const auto slot = static_cast<Index>(bodies_.size());
   if (slot < static_cast<Index>(generations_.size()))
@@ -177,6 +215,17 @@ Result<BodyId> World::add_body(std::shared_ptr<const BodyModel> model, const Bod
   if (model->mesh.tets.empty()) return make_error("add_body: the body model has no tets");
   if (def.type == BodyType::dynamic && !(model->mass.mass > 0))
     return make_error("add_body: a dynamic body needs a positive mass (check the material density)");
+  if (def.deformable) {
+    const DeformableSettings& d = *def.deformable;
+    if (def.type != BodyType::dynamic)
+      return make_error("add_body: only a dynamic body can be deformable (static and kinematic bodies do not deform)");
+    if (!std::isfinite(d.mass_damping) || d.mass_damping < 0 || !std::isfinite(d.stiffness_damping) ||
+        d.stiffness_damping < 0 || !std::isfinite(d.contact_stiffness) || !(d.contact_stiffness > 0) ||
+        d.max_newton_iterations < 1 || d.substeps < 1 || d.substeps > 1000)
+      return make_error(
+          "add_body: deformable settings: the dampings must be finite and >= 0, the contact stiffness finite and > 0, "
+          "max_newton_iterations >= 1 and substeps in [1, 1000]");
+  }
   auto shape = shared_tet_shape(model);
   if (!shape) return make_error("add_body: " + shape.error().message);
   const Index slot = add(def, std::move(*shape), std::move(model));
@@ -294,6 +343,7 @@ Result<BodyId> World::add_hull(ConvexHull hull, const BodyDef& def) {
     return make_error(
         "add_hull: a hull body must be static or kinematic (a dynamic body needs a tet mesh and a material)");
   if (hull.vertices.empty()) return make_error("add_hull: the hull is empty");
+  if (def.deformable) return make_error("add_hull: a hull cannot be deformable (give a tet body instead)");
   auto shape = std::make_shared<Shape>();
   shape->local_bounds = hull.bounds;
   for (const Vec3& v : hull.vertices) shape->radius = std::max(shape->radius, v.norm());
@@ -329,12 +379,23 @@ Result<void> World::set_rigid_state(BodyId id, const RigidState& rigid) {
       !rigid.angular_velocity.allFinite() || !(rigid.orientation.norm() > 0))
     return make_error("set_rigid_state: the state is not finite, or the orientation is zero");
   Body& b = bodies_[*slot];
+  const RigidState old = b.rigid;
   b.rigid = rigid;
   b.rigid.orientation.normalize();
   if (b.type == BodyType::static_body) {
     b.rigid.linear_velocity.setZero();
     b.rigid.angular_velocity.setZero();
     return {};
+  }
+  if (b.deform) {  // the nodes follow rigidly, keeping their deformation
+    const Mat3 turn = (b.rigid.orientation * old.orientation.conjugate()).toRotationMatrix();
+    DynamicState& nodes = b.deform->nodes;
+    for (std::size_t i = 0; i < nodes.x.size(); ++i) {
+      const Vec3 r = turn * (nodes.x[i] - old.position);
+      nodes.x[i] = b.rigid.position + r;
+      nodes.v[i] = b.rigid.linear_velocity + b.rigid.angular_velocity.cross(r);
+    }
+    fit_deformable(*slot);
   }
   wake_slot(*slot);
   return {};
@@ -346,6 +407,12 @@ Result<void> World::apply_impulse(BodyId id, const Vec3& impulse, const Vec3& po
     return make_error("apply_impulse: the impulse or point is not finite");
   Body& b = bodies_[*slot];
   if (b.type != BodyType::dynamic) return {};
+  if (b.deform) {
+    push_nodes(*slot, impulse, point);
+    fit_deformable(*slot);
+    wake_slot(*slot);
+    return {};
+  }
   b.rigid.linear_velocity += b.inertia.inverse_mass * impulse;
   b.rigid.angular_velocity +=
       world_inverse_inertia(b.inertia, b.rigid.orientation) * (point - b.rigid.position).cross(impulse);
@@ -379,7 +446,12 @@ Aabb World::slot_bounds(Index slot) const {
     all.max.setConstant(std::numeric_limits<double>::infinity());
     return all;
   }
-  return transform_box(b.shape->local_bounds, transform_of(b.rigid));
+  Aabb box = transform_box(b.shape->local_bounds, transform_of(b.rigid));
+  if (b.deform) {  // the nodes, and the rest pieces at the best-fit pose the contact solver sees
+    box.min = box.min.cwiseMin(b.deform->box.min);
+    box.max = box.max.cwiseMax(b.deform->box.max);
+  }
+  return box;
 }
 
 Result<void> World::exclude_pair(BodyId a, BodyId b) {
@@ -398,6 +470,7 @@ bool World::pair_excluded(Index a, Index b) const { return contains_pair(exclude
 
 double World::motion_bound(const Body& b) const {
   if (b.type == BodyType::static_body || !b.awake) return 0;
+  if (b.deform) return settings_.time_step * b.deform->max_speed;
   return settings_.time_step * (b.rigid.linear_velocity.norm() + b.rigid.angular_velocity.norm() * b.shape->radius);
 }
 
@@ -664,6 +737,7 @@ void World::solve() {
   std::vector<Index> moving;
   for (Index i = 0; i < n; ++i)
     if (bodies_[i].awake && bodies_[i].type != BodyType::static_body) moving.push_back(i);
+
   stats_.awake_bodies = static_cast<std::int64_t>(moving.size());
   const Vec3 dv_gravity = h * settings_.gravity;
   const auto num_moving = static_cast<std::int64_t>(moving.size());
@@ -720,7 +794,8 @@ void World::update_sleep() {
   for (Index i = 0; i < n; ++i) {
     Body& b = bodies_[i];
     if (b.type != BodyType::dynamic || !b.awake) continue;
-    const double speed = b.rigid.linear_velocity.norm() + b.rigid.angular_velocity.norm() * b.shape->radius;
+    const double speed = b.deform ? b.deform->max_speed
+                                  : b.rigid.linear_velocity.norm() + b.rigid.angular_velocity.norm() * b.shape->radius;
     if (!b.can_sleep || speed > settings_.sleep_velocity || b.sleep_time < 0)
       b.sleep_time = 0;
     else
@@ -735,6 +810,10 @@ void World::update_sleep() {
       b.awake = false;
       b.rigid.linear_velocity.setZero();
       b.rigid.angular_velocity.setZero();
+      if (b.deform) {
+        for (Vec3& v : b.deform->nodes.v) v.setZero();
+        b.deform->max_speed = 0;
+      }
     }
   }
 }
@@ -1040,6 +1119,7 @@ Result<Index> World::slice(BodyId id, const Vec3& point, const Vec3& normal) {
   SHATTER_TRY(slot, live_slot(id, "slice"));
   const Body& b = bodies_[*slot];
   if (!b.model || b.type != BodyType::dynamic) return make_error("slice: only dynamic tet bodies can be cut");
+  if (b.deform) return make_error("slice: deformable bodies cannot be cut (they do not fracture)");
   SHATTER_TRY(r, slice_body(*b.model, impact_state(b), point, normal, impact_settings(b, nullptr)));
   if (r->cracks.empty()) return Index{0};
   const auto pieces = static_cast<Index>(r->children.size());
@@ -1055,6 +1135,12 @@ void World::push_tools() {
     if (t.strike || b.removed || b.type != BodyType::dynamic) continue;
     const Vec3 point = b.rigid.position + b.rigid.orientation * t.local_point;
     const Vec3 impulse = settings_.time_step * t.vector;
+    if (b.deform) {
+      push_nodes(t.body, impulse, point);
+      fit_deformable(t.body);
+      wake_slot(t.body);
+      continue;
+    }
     b.rigid.linear_velocity += b.inertia.inverse_mass * impulse;
     b.rigid.angular_velocity +=
         world_inverse_inertia(b.inertia, b.rigid.orientation) * (point - b.rigid.position).cross(impulse);
@@ -1103,6 +1189,202 @@ void World::process_tools() {
   forget_removed();
 }
 
+std::span<const Vec3> World::node_positions(BodyId id) const {
+  const Body& b = body(id);
+  return b.deform ? std::span<const Vec3>(b.deform->nodes.x) : std::span<const Vec3>();
+}
+
+std::span<const Vec3> World::node_velocities(BodyId id) const {
+  const Body& b = body(id);
+  return b.deform ? std::span<const Vec3>(b.deform->nodes.v) : std::span<const Vec3>();
+}
+
+void World::fit_deformable(Index slot) {
+  Body& b = bodies_[slot];
+  Body::Deformation& d = *b.deform;
+  const std::vector<double>& m = b.model->fem.node_mass;
+  const std::vector<Vec3>& rest = *d.rest;
+  const std::vector<Vec3>& x = d.nodes.x;
+  const std::vector<Vec3>& v = d.nodes.v;
+  // Centre of mass and momentum from the lumped masses (for linear tets their centre is the exact
+  // one, the rest frame's origin).
+  double mass = 0;
+  Vec3 c = Vec3::Zero(), p = Vec3::Zero();
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    mass += m[i];
+    c += m[i] * x[i];
+    p += m[i] * v[i];
+  }
+  c /= mass;
+  const Vec3 velocity = p / mass;
+  // Best-fit rotation: the polar factor of sum m_i (x_i - c) r_i^T (shape matching).
+  // Angular velocity: the nodes' angular momentum through their inertia (both about c).
+  Mat3 A = Mat3::Zero(), inertia = Mat3::Zero();
+  Vec3 L = Vec3::Zero();
+  d.box = Aabb{};
+  d.max_speed = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const Vec3 r = x[i] - c;
+    A += m[i] * r * rest[i].transpose();
+    inertia += m[i] * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+    L += m[i] * r.cross(v[i] - velocity);
+    d.box.extend(x[i]);
+    d.max_speed = std::max(d.max_speed, v[i].norm());
+  }
+  Quat q(polar_decomposition(A).R);
+  q.normalize();
+  if (q.dot(b.rigid.orientation) < 0) q.coeffs() = -q.coeffs();  // the sign the pose had
+  b.rigid.position = c;
+  b.rigid.orientation = q;
+  b.rigid.linear_velocity = velocity;
+  b.rigid.angular_velocity = inertia.ldlt().solve(L);
+  // The model shows the deformed shape in the body frame (copied first if a snapshot shares it).
+  if (d.model.use_count() > 2) {
+    d.model = std::make_shared<BodyModel>(*d.model);
+    b.model = d.model;
+  }
+  BodyModel& model = *d.model;
+  const Mat3 Rt = q.toRotationMatrix().transpose();
+  for (std::size_t i = 0; i < x.size(); ++i) model.mesh.positions[i] = Rt * (x[i] - c);
+  for (std::size_t k = 0; k < model.surface.positions.size(); ++k)
+    model.surface.positions[k] = model.mesh.positions[static_cast<std::size_t>(model.surface.vertex_node[k])];
+}
+
+void World::push_nodes(Index slot, const Vec3& impulse, const Vec3& point) {
+  Body& b = bodies_[slot];
+  Body::Deformation& d = *b.deform;
+  const std::vector<double>& m = b.model->fem.node_mass;
+  const TriSurface& surf = b.model->surface;
+  std::vector<Vec3>& x = d.nodes.x;
+  std::vector<Vec3>& v = d.nodes.v;
+  // The surface nodes within the patch radius, weighted (1 - d/r)^2 (the nearest one when none is).
+  thread_local std::vector<std::pair<Index, double>> near;
+  near.clear();
+  double total = 0;
+  Index nearest = -1;
+  double nearest_d2 = std::numeric_limits<double>::infinity();
+  for (const Index node : surf.vertex_node) {
+    const double d2 = (x[node] - point).squaredNorm();
+    if (d2 < nearest_d2) {
+      nearest_d2 = d2;
+      nearest = node;
+    }
+    if (d2 < d.patch_radius * d.patch_radius) {
+      const double w = 1 - std::sqrt(d2) / d.patch_radius;
+      near.emplace_back(node, w * w);
+      total += w * w;
+    }
+  }
+  if (!(total > 0)) {
+    near.assign(1, {nearest, 1.0});
+    total = 1;
+  }
+  // Node i takes w_i J: the momentum changes by J, and the moment about c by (sum w_i x_i - c) x J.
+  Vec3 centre = Vec3::Zero();
+  for (const auto& [node, w] : near) {
+    v[node] += (w / total / m[node]) * impulse;
+    centre += (w / total) * x[node];
+  }
+  // The moment the patch's centre misses turns the whole body.
+  turn_nodes(slot, (point - centre).cross(impulse));
+}
+
+void World::turn_nodes(Index slot, const Vec3& moment) {
+  if (moment.squaredNorm() == 0) return;
+  Body& b = bodies_[slot];
+  const std::vector<double>& m = b.model->fem.node_mass;
+  std::vector<Vec3>& x = b.deform->nodes.x;
+  std::vector<Vec3>& v = b.deform->nodes.v;
+  // dw = I^-1 H with I = sum m_i (|r_i|^2 1 - r_i r_i^T) about the centre of mass c; v_i += dw x r_i
+  // changes the angular momentum by I dw = H and the momentum by dw x sum m_i r_i = 0.
+  Vec3 c = Vec3::Zero();
+  double mass = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    c += m[i] * x[i];
+    mass += m[i];
+  }
+  c /= mass;
+  Mat3 inertia = Mat3::Zero();
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const Vec3 r = x[i] - c;
+    inertia += m[i] * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+  }
+  const Vec3 dw = inertia.ldlt().solve(moment);
+  for (std::size_t i = 0; i < x.size(); ++i) v[i] += dw.cross(x[i] - c);
+}
+
+DynamicObstacles World::deformable_obstacles(Index slot) const {
+  const Body& b = bodies_[slot];
+  DynamicObstacles out;
+  // Anything within reach of the nodes over the step.
+  const Aabb reach = grow(b.deform->box, settings_.speculative_distance + settings_.time_step * b.deform->max_speed);
+  for (Index o = 0; o < body_count(); ++o) {
+    const Body& other = bodies_[o];
+    if (o == slot || other.removed || other.type == BodyType::dynamic) continue;
+    if (!(b.filter.group & other.filter.mask) || !(other.filter.group & b.filter.mask) || pair_excluded(slot, o))
+      continue;
+    const double mu = std::sqrt(b.surface.friction * other.surface.friction);
+    if (other.shape->is_plane) {
+      out.planes.push_back({.normal = other.shape->plane.normal, .offset = other.shape->plane.offset, .friction = mu});
+      continue;
+    }
+    const Transform t = transform_of(other.rigid);
+    if (!boxes_overlap(reach, slot_bounds(o))) continue;
+    for (const ConvexHull& piece : other.shape->pieces) {
+      if (!boxes_overlap(reach, transform_box(piece.bounds, t))) continue;
+      ContactConvex convex{.faces = {}, .friction = mu};
+      for (const HullFace& f : piece.faces) {
+        const Vec3 n = t.rotation * f.normal;
+        convex.faces.push_back({.normal = n, .offset = f.offset + n.dot(t.translation)});
+      }
+      out.convexes.push_back(std::move(convex));
+    }
+  }
+  return out;
+}
+
+void World::step_deformables() {
+  for (Index slot = 0; slot < body_count(); ++slot) {
+    Body& b = bodies_[slot];
+    if (!b.deform || !b.awake || b.removed) continue;
+    Body::Deformation& d = *b.deform;
+    // What the contact solver gave it through its contacts with other dynamic bodies, as impulses
+    // on the nodes: each point's normal impulse there, the friction at the friction centre and the
+    // twist about the normal, all summed over the step (what the other body took, reversed).
+    // (Its contacts with planes, static and kinematic bodies held it up in that solve, as a rigid
+    // body; the FEM step below meets those obstacles itself.)
+    for (const Contact& ct : contacts_) {
+      if (ct.body_a != slot && ct.body_b != slot) continue;
+      if (bodies_[ct.body_a == slot ? ct.body_b : ct.body_a].type != BodyType::dynamic) continue;
+      const ContactConstraint& cc = ct.constraint;
+      if (cc.count == 0) continue;
+      const double sign = ct.body_b == slot ? 1.0 : -1.0;  // the impulses act on B along +normal
+      for (int i = 0; i < cc.count; ++i) {
+        const ContactPoint& p = cc.points[i];
+        if (p.total_normal_impulse != 0) push_nodes(slot, sign * p.total_normal_impulse * cc.normal, p.position);
+      }
+      // The friction centre: A's centre of mass at the step's start plus centre_a.
+      const Vec3 centre = cc.points[0].position - cc.points[0].anchor_a + cc.centre_a;
+      if (cc.total_friction_impulse.squaredNorm() > 0) push_nodes(slot, sign * cc.total_friction_impulse, centre);
+      if (cc.total_twist_impulse != 0) turn_nodes(slot, sign * cc.total_twist_impulse * cc.normal);
+    }
+    const DynamicObstacles obstacles = deformable_obstacles(slot);
+    bool converged = true;
+    for (int sub = 0; sub < d.substeps; ++sub) {
+      Result<DynamicStepReport> report = d.solver->step(b.model->fem, obstacles, d.nodes);
+      if (!report) {
+        log_warning("world: the FEM step of deformable body " + std::to_string(slot) +
+                    " failed: " + report.error().message);
+        break;
+      }
+      stats_.deformable_newton_iterations += report->newton_iterations;
+      converged = converged && report->converged;
+    }
+    if (!converged) ++stats_.deformable_unconverged;
+    fit_deformable(slot);
+  }
+}
+
 void World::step() {
   stats_ = {};
   events_ = {};
@@ -1124,8 +1406,11 @@ void World::step() {
     t0 = Clock::now();
     update_islands_and_wake();
     solve();
-    update_sleep();
     stats_.solver_ms = ms_since(t0);
+    t0 = Clock::now();
+    step_deformables();
+    stats_.deformable_ms = ms_since(t0);
+    update_sleep();
     t0 = Clock::now();
     ++step_count_;
     process_impacts();
@@ -1143,8 +1428,15 @@ Index World::live_body_count() const {
 
 double World::kinetic_energy() const {
   double e = 0;
-  for (const Body& b : bodies_)
-    if (b.type == BodyType::dynamic && !b.removed) e += shatter::kinetic_energy(b.inertia, b.rigid);
+  for (const Body& b : bodies_) {
+    if (b.type != BodyType::dynamic || b.removed) continue;
+    if (!b.deform) {
+      e += shatter::kinetic_energy(b.inertia, b.rigid);
+      continue;
+    }
+    const std::vector<double>& m = b.model->fem.node_mass;
+    for (std::size_t i = 0; i < m.size(); ++i) e += 0.5 * m[i] * b.deform->nodes.v[i].squaredNorm();
+  }
   return e;
 }
 
@@ -1196,6 +1488,11 @@ std::uint64_t World::state_hash() const {
     if (!b.tensile_strength.empty()) {  // (bodies without drawn strengths hash as before)
       h.add(static_cast<Index>(b.tensile_strength.size()));
       for (const double s : b.tensile_strength) h.add(s);
+    }
+    if (b.deform) {
+      h.add(std::span<const Vec3>(b.deform->nodes.x));
+      h.add(std::span<const Vec3>(b.deform->nodes.v));
+      h.add(b.deform->max_speed);
     }
   }
   for (const Contact& c : contacts_) {
