@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <numeric>
 #include <unordered_map>
 #include <vector>
 
@@ -58,7 +59,6 @@ uniform int u_view;       // 0 material, 1 stress
 uniform vec3 u_outside;
 uniform vec3 u_inside;
 uniform float u_gloss;
-uniform int u_grain;      // Appearance::Grain
 uniform float u_highlight;
 out vec4 o_color;
 
@@ -81,27 +81,22 @@ float fbm(vec3 p) {
   for (int i = 0; i < 3; ++i) { s += a * noise3(p); p *= 2.03; a *= 0.5; }
   return s;
 }
-// Solid textures in rest coordinates (m): the same at a point in every fragment of a body.
+// Solid textures in rest coordinates (m): the same at a point in every fragment of a body. One
+// formula for every grain, its numbers per grain as uniforms (grain_uniforms): llvmpipe runs both
+// sides of every branch under a mask, so a branch per grain would cost every grain's noise.
+uniform vec3 u_in_noise;   // inside: base, amplitude, frequency (1/m) of fbm
+uniform float u_specks;    // inside: weight of dark specks (stone)
+uniform vec3 u_out_noise;  // outside: base, amplitude, frequency (1/m) of one noise octave
+uniform float u_bands;     // outside: weight of cobalt bands (glazed porcelain)
 vec3 inside_color(vec3 r) {
-  if (u_grain == 1) {  // stone: aggregate and dark specks in a grey matrix
-    float g = fbm(r * 35.0);
-    vec3 c = u_inside * (0.75 + 0.45 * g);
-    float speck = step(0.8, noise3(r * 160.0));
-    return mix(c, c * 0.45, speck);
-  }
-  if (u_grain == 2) return u_inside * (0.93 + 0.1 * fbm(r * 90.0));  // porcelain: white bisque
-  if (u_grain == 3) return u_inside * (0.8 + 0.35 * fbm(r * 25.0));  // clay: kneaded streaks
-  if (u_grain == 4) return u_inside * (0.95 + 0.08 * fbm(r * 60.0)); // glass
-  return u_inside * (0.9 + 0.15 * fbm(r * 120.0));
+  vec3 c = u_inside * (u_in_noise.x + u_in_noise.y * fbm(r * u_in_noise.z));
+  float speck = u_specks * step(0.8, noise3(r * 160.0));
+  return mix(c, c * 0.45, speck);
 }
 vec3 outside_color(vec3 r) {
-  if (u_grain == 2) {  // glazed porcelain with cobalt bands
-    float band = smoothstep(0.35, 0.45, abs(fract(r.y * 9.0) - 0.5));
-    return mix(u_outside, vec3(0.06, 0.12, 0.45), 0.85 * band);
-  }
-  if (u_grain == 1) return u_outside * (0.8 + 0.4 * noise3(r * 20.0));
-  if (u_grain == 3) return u_outside * (0.85 + 0.3 * noise3(r * 12.0));
-  return u_outside;
+  vec3 c = u_outside * (u_out_noise.x + u_out_noise.y * noise3(r * u_out_noise.z));
+  float band = smoothstep(0.35, 0.45, abs(fract(r.y * 9.0) - 0.5));
+  return mix(c, vec3(0.06, 0.12, 0.45), u_bands * 0.85 * band);
 }
 float shadow_factor(vec3 n) {
   if (u_use_shadow == 0) return 1.0;
@@ -257,6 +252,27 @@ Mat4 ortho(double half, double n, double f) {
   p(2, 2) = -2 / (f - n);
   p(2, 3) = -(f + n) / (f - n);
   return p;
+}
+
+// The solid-texture numbers of a grain (the main shader's u_in_noise, u_specks, u_out_noise,
+// u_bands): inside, base + amplitude * fbm(r * frequency), stone with dark specks; outside, one
+// noise octave for stone and clay, cobalt bands for porcelain.
+void set_grain(GLuint program, Appearance::Grain grain) {
+  using G = Appearance::Grain;
+  Vec3 in(0.9, 0.15, 120), out(1, 0, 1);
+  double specks = 0, bands = 0;
+  switch (grain) {
+    case G::stone: in = {0.75, 0.45, 35}, out = {0.8, 0.4, 20}, specks = 1; break;  // aggregate, specks
+    case G::porcelain: in = {0.93, 0.1, 90}, bands = 1; break;                      // white bisque, glaze
+    case G::clay: in = {0.8, 0.35, 25}, out = {0.85, 0.3, 12}; break;               // kneaded streaks
+    case G::glass: in = {0.95, 0.08, 60}; break;
+    case G::none:
+    case G::metal: break;
+  }
+  set_vec(program, "u_in_noise", in);
+  set_float(program, "u_specks", specks);
+  set_vec(program, "u_out_noise", out);
+  set_float(program, "u_bands", bands);
 }
 
 Mat4 body_matrix(const DrawBody& b) {
@@ -604,7 +620,11 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   glDisable(GL_BLEND);
-  glDisable(GL_CULL_FACE);
+  // Body surfaces are closed and outward (counter-clockwise seen from outside): their back faces
+  // are hidden, and not shading them halves the work of a software rasterizer.
+  glEnable(GL_CULL_FACE);
+  glCullFace(GL_BACK);
+  glFrontFace(GL_CCW);
   glUseProgram(im.main);
   set_mat(im.main, "u_view_proj", view_proj);
   set_mat(im.main, "u_light_vp", light_vp);
@@ -617,19 +637,29 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
   glBindTexture(GL_TEXTURE_2D, im.shadow_tex);
   set_int(im.main, "u_shadow", 0);
 
-  for (std::size_t i = 0; i < frame.bodies.size(); ++i) {
+  // Nearest first: what they hide fails the depth test before it is shaded.
+  std::vector<std::size_t> order(frame.bodies.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  const Vec3 eye = camera.eye();
+  std::sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) {
+    const double dx = (frame.bodies[x].position - eye).squaredNorm();
+    const double dy = (frame.bodies[y].position - eye).squaredNorm();
+    return dx != dy ? dx < dy : x < y;
+  });
+  for (const std::size_t i : order) {
     const DrawBody& b = frame.bodies[i];
     set_mat(im.main, "u_model", body_matrix(b));
     set_vec(im.main, "u_outside", b.look.outside);
     set_vec(im.main, "u_inside", b.look.inside);
     set_float(im.main, "u_gloss", b.look.gloss);
-    set_int(im.main, "u_grain", static_cast<int>(b.look.grain));
+    set_grain(im.main, b.look.grain);
     set_float(im.main, "u_highlight", b.highlight ? 1.0 : 0.0);
     glBindVertexArray(meshes[i]->vao);
     glDrawArrays(GL_TRIANGLES, 0, meshes[i]->count);
     ++stats.bodies;
     stats.triangles += meshes[i]->count / 3;
   }
+  glDisable(GL_CULL_FACE);
   // The ground after the bodies: its fragments behind them fail the depth test before shading.
   if (options.ground && frame.ground) {
     const Plane& p = *frame.ground;
