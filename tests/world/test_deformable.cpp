@@ -126,6 +126,40 @@ TEST(Deformable, FallsFreelyThenRestsSquashedOnTheGround) {
     EXPECT_LT((s.positions[k] - w.node_positions(id)[m.surface.vertex_node[k]]).norm(), 1e-12);
 }
 
+// In a world as on its own (docs/dynamics.md): kinetic + elastic + gravitational + penalty energy
+// never grows, through the fall, the landing, the rebound and the settling.
+TEST(Deformable, BouncesAndSettlesWithEnergyThatNeverGrows) {
+  World w;
+  add_ground(w, {.friction = 0.5});
+  const auto model = box_model(Vec3(0.1, 0.1, 0.1), rubber(), {3, 3, 3});
+  BodyDef def = deformable_def(Vec3(0, 0.4, 0), Vec3(0.5, 0, 0), 0.002);
+  def.rigid.angular_velocity = Vec3(0, 0, 3);
+  def.deformable->substeps = 4;
+  def.surface.friction = 0.5;
+  const BodyId id = *w.add_body(model, def);
+  const DynamicSolver solver({.time_step = w.settings().time_step / 4, .gravity = w.settings().gravity});
+  const DynamicObstacles ground{.planes = {{.normal = Vec3::UnitY(), .offset = 0, .friction = 0.5}}};
+  auto energy = [&] {
+    const std::span<const Vec3> x = w.node_positions(id), v = w.node_velocities(id);
+    return solver.energy(model->fem, ground, {{x.begin(), x.end()}, {v.begin(), v.end()}});
+  };
+  double e = energy();
+  const double e0 = e;
+  double bounce = 0;
+  bool landed = false;
+  for (int n = 0; n < 240; ++n) {
+    w.step();
+    const double next = energy();
+    EXPECT_LE(next, e + 1e-9 * std::abs(e0)) << "step " << n;
+    e = next;
+    landed = landed || lowest_node(w, id) < 1e-3;
+    if (landed) bounce = std::max(bounce, lowest_node(w, id));
+  }
+  EXPECT_GT(bounce, 0.005);  // it bounced
+  EXPECT_LT(fastest_node(w, id), 1e-2);
+  EXPECT_GT(lowest_node(w, id), -1e-4);
+}
+
 TEST(Deformable, RestsOnAStaticBox) {
   World w;
   add_ground(w);

@@ -461,6 +461,23 @@ TEST(Impacts, Soak) {
       ASSERT_OK(w.add_body(model, {.rigid = r}));
       mass0 += model->mass.mass;
     }
+    {  // and a soft body with full FEM dynamics thrown among them
+      const Material rubber{.name = "rubber",
+                            .youngs_modulus = rng.uniform(0.3e6, 3e6),
+                            .poisson_ratio = 0.4,
+                            .density = 1100,
+                            .tensile_strength = kInfinity,
+                            .yield_stress = kInfinity,
+                            .fracture_toughness = kInfinity};
+      const auto model = scenes::box_model(Vec3(0.15, 0.1, 0.08), rubber, {4, 3, 2});
+      RigidState r = drop_pose(*model, rng.uniform(0.2, 2.0), Quat::Identity(), 1.0 / 60, 0);
+      r.position.x() = rng.uniform(0, 1.2);
+      r.position.z() = 0.5;
+      r.linear_velocity = Vec3(rng.uniform(-2, 2), rng.uniform(-4, 0), rng.uniform(-2, 0));
+      r.angular_velocity = Vec3(rng.uniform(-3, 3), rng.uniform(-3, 3), rng.uniform(-3, 3));
+      ASSERT_OK(w.add_body(model, {.rigid = r, .deformable = DeformableSettings{.stiffness_damping = 0.005}}));
+      mass0 += model->mass.mass;
+    }
     double debris = 0;
     for (int step = 0; step < 120; ++step) {
       const double before = live_mass(w, debris);
@@ -476,6 +493,10 @@ TEST(Impacts, Soak) {
       EXPECT_TRUE(r.position.allFinite() && r.linear_velocity.allFinite() && r.angular_velocity.allFinite());
       EXPECT_GT(r.position.y(), -0.05) << "round " << round << " body " << i.index << " fell through the ground";
       EXPECT_FALSE(validate_mesh(w.model(i)->mesh).has_errors());
+      for (const Vec3& x : w.node_positions(i)) {
+        ASSERT_TRUE(x.allFinite());
+        EXPECT_GT(x.y(), -0.05) << "round " << round << " a node of deformable body " << i.index << " fell through";
+      }
     }
   }
 }
