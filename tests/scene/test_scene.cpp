@@ -306,7 +306,7 @@ TEST(SceneRun, ARubberMatCushionsAVaseAndABallBounces) {
   EXPECT_FALSE(w.deformable(on_rubber));
   bool landed = false;
   double rebound = 0;
-  while (w.time() < 1.0) {
+  while (w.time() < 0.75) {  // both vases land at 0.47 s; the ball is back up at about 0.6 s
     w.step();
     double lowest = kInfinity;
     for (const Vec3& x : w.node_positions(ball)) lowest = std::min(lowest, x.y());
