@@ -205,6 +205,47 @@ TEST(Deformable, ExchangesMomentumExactlyWithARigidBody) {
   EXPECT_LE(w.kinetic_energy(), 0.5 * w.model(soft)->mass.mass * 4 * (1 + 1e-9));
 }
 
+TEST(Deformable, TwoDeformableBodiesExchangeMomentumExactly) {
+  WorldSettings settings;
+  settings.gravity = Vec3::Zero();
+  World w(settings);
+  const auto model = box_model(Vec3(0.1, 0.1, 0.1), rubber(), {2, 2, 2});
+  const BodyId a = *w.add_body(model, deformable_def(Vec3(0, 0, 0), Vec3(1.5, 0, 0), 0));
+  const BodyId b = *w.add_body(model, deformable_def(Vec3(0.35, 0.08, 0), Vec3(-0.5, 0, 0), 0));
+  const Vec3 p0 = momentum(w);
+  bool touched = false;
+  for (int n = 0; n < 60; ++n) {
+    w.step();
+    touched = touched || !w.contacts().empty();
+    EXPECT_LT((momentum(w) - p0).norm(), 1e-7 * p0.norm()) << "step " << n;
+  }
+  EXPECT_TRUE(touched);
+  // No restitution: they go on together at the mean velocity, 0.5 m/s.
+  EXPECT_NEAR(w.rigid_state(a).linear_velocity.x(), 0.5, 0.05);
+  EXPECT_NEAR(w.rigid_state(b).linear_velocity.x(), 0.5, 0.05);
+}
+
+TEST(Deformable, AMovingKinematicBoxPushesItAlongTheGround) {
+  World w;
+  add_ground(w);
+  BodyDef pusher;
+  pusher.type = BodyType::kinematic;
+  // Taller than the cube: a node level with the pusher's top would be pushed out upwards.
+  pusher.rigid.position = Vec3(-0.3, 0.15, 0);
+  pusher.rigid.linear_velocity = Vec3(0.5, 0, 0);
+  const BodyId k = *w.add_box(Vec3(0.1, 0.15, 0.3), pusher);
+  BodyDef def = deformable_def(Vec3(0, 0.1, 0));
+  def.can_sleep = true;
+  const BodyId soft = *w.add_body(box_model(Vec3(0.1, 0.1, 0.1), rubber(), {2, 2, 2}), def);
+  for (int n = 0; n < 120; ++n) w.step();  // 2 s: the box moves 1 m
+  const double front = w.rigid_state(k).position.x() + 0.1;
+  // Pushed ahead of the box, never through it, and still on the ground.
+  EXPECT_GT(w.rigid_state(soft).position.x(), 0.5);
+  for (const Vec3& x : w.node_positions(soft)) EXPECT_GT(x.x(), front - 5e-3);
+  EXPECT_GT(lowest_node(w, soft), -1e-3);
+  EXPECT_TRUE(w.awake(soft));  // a moving kinematic body keeps what it pushes awake
+}
+
 // A rigid box dropped on a soft slab lying on the ground: the slab carries it.
 World slab_world(BodyId& slab, BodyId& box) {
   World w;
