@@ -271,7 +271,8 @@ class World {
   [[nodiscard]] const RigidInertia& inertia(BodyId id) const { return body(id).inertia; }
   /// The tet model of a body (null for planes and hulls). For a deformable body its mesh and
   /// surface positions are the current deformed shape in the body frame (world x = position +
-  /// R(orientation) r, with the best-fit pose); its `fem` part keeps the rest state.
+  /// R(orientation) r, with the best-fit pose); its `fem` part keeps the rest state. Ask again after
+  /// each step: a step may give it a new copy (while a snapshot holds the old one).
   [[nodiscard]] const BodyModel* model(BodyId id) const { return body(id).model.get(); }
   /// Whether the body is simulated with full FEM dynamics (BodyDef::deformable).
   [[nodiscard]] bool deformable(BodyId id) const { return body(id).deform.has_value(); }
