@@ -686,8 +686,9 @@ void Viewer::ui() {
     if (w.parent(id).index >= 0) ++fragments;
   }
   ImGui::Text("%.0f fps, frame %.1f ms, draw %.1f ms", fps_, frame_ms_, draw_ms_);
-  ImGui::Text("step %.2f ms: broad %.2f, narrow %.2f, solve %.2f, impacts %.2f", last_step_ms_,
-              last_stats_.broad_phase_ms, last_stats_.narrow_phase_ms, last_stats_.solver_ms, last_stats_.impact_ms);
+  ImGui::Text("step %.2f ms: broad %.2f, narrow %.2f, solve %.2f, deformable %.2f, impacts %.2f", last_step_ms_,
+              last_stats_.broad_phase_ms, last_stats_.narrow_phase_ms, last_stats_.solver_ms, last_stats_.deformable_ms,
+              last_stats_.impact_ms);
   ImGui::Text("%d bodies, %lld tets, %lld fragments, %lld contacts", static_cast<int>(w.live_body_count()),
               static_cast<long long>(tets), static_cast<long long>(fragments),
               static_cast<long long>(last_stats_.contacts));
