@@ -2,6 +2,8 @@
 // inertia tensor, exact for the union of the tets or lumped at the nodes as in the paper (eq. 21).
 #pragma once
 
+#include <span>
+
 #include "shatter/core/types.h"
 #include "shatter/mesh/tet_mesh.h"
 
@@ -23,5 +25,9 @@ MassProperties mass_properties(const TetMesh& mesh, double density);
 /// The same with lumped nodal masses (each tet gives rho V / 4 to each corner; docs/method.md eq. 21):
 /// I = sum m_i (r_i^T r_i I3 - r_i r_i^T). Approximate; for comparison with the paper.
 MassProperties lumped_mass_properties(const TetMesh& mesh, double density);
+
+/// Mass, centre and inertia (about the centre) of point masses m_i at x_i, e.g. a body's lumped
+/// nodes where they are now (volume 0; an empty or massless set gives zeros).
+MassProperties point_mass_properties(std::span<const double> masses, std::span<const Vec3> positions);
 
 }  // namespace shatter

@@ -413,10 +413,9 @@ class World {
     /// Full FEM dynamics (BodyDef::deformable). `model` is then the body's own copy, its positions
     /// kept at the deformed shape (copied before a change while a snapshot shares it).
     struct Deformation {
-      DynamicSolverOptions options;  ///< time_step: the world's over substeps
-      int substeps = 1;
-      std::shared_ptr<BodyModel> model;               ///< the body's model (Body::model)
-      DynamicState nodes;                             ///< world
+      int substeps = 1;                  ///< FEM steps per world step (the solver's time step is the world's over this)
+      std::shared_ptr<BodyModel> model;  ///< the body's model (Body::model)
+      DynamicState nodes;                ///< world
       std::shared_ptr<const std::vector<Vec3>> rest;  ///< rest node positions, body frame
       std::shared_ptr<DynamicSolver> solver;          ///< pattern cache, kept between steps
       double patch_radius = 0;  ///< contact impulses are spread over the surface nodes this close, m
@@ -473,9 +472,10 @@ class World {
   void step_deformables();
   /// Obstacles of a deformable body's nodes: planes, static and kinematic bodies near it.
   [[nodiscard]] DynamicObstacles deformable_obstacles(Index slot) const;
-  /// Add impulse J at world point p to a deformable body's nodes near p (and the moment it lacks
-  /// to the whole body), so that their momentum changes by exactly J and (p - c) x J.
-  void push_nodes(Index slot, const Vec3& impulse, const Vec3& point);
+  /// Add impulse J at world point p to a deformable body's surface nodes near p: their momentum
+  /// changes by exactly J. Returns the moment about c the spread misses of (p - c) x J, for
+  /// turn_nodes (which adds up several such moments in one pass over the nodes).
+  [[nodiscard]] Vec3 spread_impulse(Index slot, const Vec3& impulse, const Vec3& point);
   /// Turn a deformable body's nodes rigidly so that their angular momentum changes by H (N m s).
   void turn_nodes(Index slot, const Vec3& moment);
   /// Pose, velocities and box of a deformable body from its nodes; its model's positions follow.

@@ -41,16 +41,24 @@ MassProperties lumped_mass_properties(const TetMesh& mesh, double density) {
     m.volume += v;
     for (Index i : mesh.tets[e]) node_mass[i] += density * v / 4.0;
   }
+  const double volume = m.volume;
+  m = point_mass_properties(node_mass, mesh.positions);
+  m.volume = volume;
+  return m;
+}
+
+MassProperties point_mass_properties(std::span<const double> masses, std::span<const Vec3> positions) {
+  MassProperties m;
   Vec3 c = Vec3::Zero();
-  for (Index i = 0; i < mesh.num_nodes(); ++i) {
-    m.mass += node_mass[i];
-    c += node_mass[i] * mesh.positions[i];
+  for (std::size_t i = 0; i < masses.size(); ++i) {
+    m.mass += masses[i];
+    c += masses[i] * positions[i];
   }
   if (m.mass <= 0) return m;
   m.center = c / m.mass;
-  for (Index i = 0; i < mesh.num_nodes(); ++i) {
-    const Vec3 r = mesh.positions[i] - m.center;
-    m.inertia += node_mass[i] * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+  for (std::size_t i = 0; i < masses.size(); ++i) {
+    const Vec3 r = positions[i] - m.center;
+    m.inertia += masses[i] * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
   }
   return m;
 }

@@ -93,24 +93,16 @@ std::vector<AnchorMask> hold_far(const TetMesh& mesh, const std::vector<LocalLoa
 std::vector<AnchorMask> hold_inertia_relief(const TetMesh& mesh, const FemModel& fem, const Vec3& load_point,
                                             std::vector<Vec3>& forces) {
   const std::size_t nn = mesh.positions.size();
-  double mass = 0;
-  Vec3 centre = Vec3::Zero();
-  for (std::size_t i = 0; i < nn; ++i) {
-    mass += fem.node_mass[i];
-    centre += fem.node_mass[i] * mesh.positions[i];
-  }
-  centre /= mass;
+  const MassProperties lumped = point_mass_properties(fem.node_mass, mesh.positions);
+  const Vec3& centre = lumped.center;
   Vec3 force = Vec3::Zero();
   Vec3 moment = Vec3::Zero();
-  Mat3 inertia = Mat3::Zero();
   for (std::size_t i = 0; i < nn; ++i) {
-    const Vec3 r = mesh.positions[i] - centre;
     force += forces[i];
-    moment += r.cross(forces[i]);
-    inertia += fem.node_mass[i] * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+    moment += (mesh.positions[i] - centre).cross(forces[i]);
   }
-  const Vec3 a = force / mass;
-  const Vec3 alpha = inertia.ldlt().solve(moment);
+  const Vec3 a = force / lumped.mass;
+  const Vec3 alpha = lumped.inertia.ldlt().solve(moment);
   for (std::size_t i = 0; i < nn; ++i) forces[i] -= fem.node_mass[i] * (a + alpha.cross(mesh.positions[i] - centre));
   // Three held nodes: the farthest from the load, the farthest from it, and the farthest from
   // the line through both (ties: the lower index).

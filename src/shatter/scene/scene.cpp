@@ -599,7 +599,7 @@ Result<SceneWorld> build_scene(const Scene& scene) {
     BodyDef def{.type = b.type,
                 .rigid = rigid,
                 .surface = b.surface,
-                .breakable = b.breakable && !b.deformable,
+                .breakable = b.breakable,
                 .impact = std::make_shared<const ImpactSettings>(b.impact),
                 .deformable = b.deformable};
     auto shared = std::make_shared<const BodyModel>(std::move(*model));

@@ -16,6 +16,7 @@
 #include "shatter/core/log.h"
 #include "shatter/core/parallel.h"
 #include "shatter/fem/constitutive.h"
+#include "shatter/mesh/mass_properties.h"
 
 namespace shatter {
 namespace {
@@ -125,15 +126,14 @@ Index World::add(const BodyDef& def, std::shared_ptr<const Shape> shape, std::sh
     const DeformableSettings& ds = *def.deformable;
     Body::Deformation d;
     d.substeps = ds.substeps;
-    d.options = {.time_step = settings_.time_step / ds.substeps,
-                 .gravity = settings_.gravity,
-                 .mass_damping = ds.mass_damping,
-                 .stiffness_damping = ds.stiffness_damping,
-                 .contact_stiffness = ds.contact_stiffness,
-                 .max_newton_iterations = ds.max_newton_iterations};
     d.model = std::make_shared<BodyModel>(*body.model);
     d.rest = std::make_shared<const std::vector<Vec3>>(body.model->mesh.positions);
-    d.solver = std::make_shared<DynamicSolver>(d.options);
+    d.solver = std::make_shared<DynamicSolver>(DynamicSolverOptions{.time_step = settings_.time_step / ds.substeps,
+                                                                    .gravity = settings_.gravity,
+                                                                    .mass_damping = ds.mass_damping,
+                                                                    .stiffness_damping = ds.stiffness_damping,
+                                                                    .contact_stiffness = ds.contact_stiffness,
+                                                                    .max_newton_iterations = ds.max_newton_iterations});
     const Mat3 R = body.rigid.orientation.toRotationMatrix();
     for (const Vec3& r : *d.rest) {
       d.nodes.x.emplace_back(body.rigid.position + R * r);
@@ -146,11 +146,7 @@ Index World::add(const BodyDef& def, std::shared_ptr<const Shape> shape, std::sh
       for (int k = 0; k < 3; ++k) edges += (surf.positions[t[k]] - surf.positions[t[(k + 1) % 3]]).norm();
     d.patch_radius = surf.triangles.empty() ? 0 : 2 * edges / (3 * static_cast<double>(surf.triangles.size()));
     // The contact solver sees it as a rigid body with the nodes' mass distribution.
-    Mat3 inertia = Mat3::Zero();
-    for (std::size_t i = 0; i < d.rest->size(); ++i) {
-      const Vec3& r = (*d.rest)[i];
-      inertia += body.model->fem.node_mass[i] * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
-    }
+    const Mat3 inertia = point_mass_properties(body.model->fem.node_mass, *d.rest).inertia;
     body.inertia.inertia_body = inertia;
     body.inertia.inverse_inertia_body = inertia.inverse();
     body.model = d.model;
@@ -408,7 +404,7 @@ Result<void> World::apply_impulse(BodyId id, const Vec3& impulse, const Vec3& po
   Body& b = bodies_[*slot];
   if (b.type != BodyType::dynamic) return {};
   if (b.deform) {
-    push_nodes(*slot, impulse, point);
+    turn_nodes(*slot, spread_impulse(*slot, impulse, point));
     fit_deformable(*slot);
     wake_slot(*slot);
     return {};
@@ -737,7 +733,6 @@ void World::solve() {
   std::vector<Index> moving;
   for (Index i = 0; i < n; ++i)
     if (bodies_[i].awake && bodies_[i].type != BodyType::static_body) moving.push_back(i);
-
   stats_.awake_bodies = static_cast<std::int64_t>(moving.size());
   const Vec3 dv_gravity = h * settings_.gravity;
   const auto num_moving = static_cast<std::int64_t>(moving.size());
@@ -1136,7 +1131,7 @@ void World::push_tools() {
     const Vec3 point = b.rigid.position + b.rigid.orientation * t.local_point;
     const Vec3 impulse = settings_.time_step * t.vector;
     if (b.deform) {
-      push_nodes(t.body, impulse, point);
+      turn_nodes(t.body, spread_impulse(t.body, impulse, point));
       fit_deformable(t.body);
       wake_slot(t.body);
       continue;
@@ -1206,27 +1201,22 @@ void World::fit_deformable(Index slot) {
   const std::vector<Vec3>& rest = *d.rest;
   const std::vector<Vec3>& x = d.nodes.x;
   const std::vector<Vec3>& v = d.nodes.v;
-  // Centre of mass and momentum from the lumped masses (for linear tets their centre is the exact
-  // one, the rest frame's origin).
-  double mass = 0;
-  Vec3 c = Vec3::Zero(), p = Vec3::Zero();
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    mass += m[i];
-    c += m[i] * x[i];
-    p += m[i] * v[i];
-  }
-  c /= mass;
-  const Vec3 velocity = p / mass;
+  // Centre of mass and inertia of the lumped masses (for linear tets their centre is the exact
+  // one, the rest frame's origin), and their momentum.
+  const MassProperties lumped = point_mass_properties(m, x);
+  const Vec3& c = lumped.center;
+  Vec3 p = Vec3::Zero();
+  for (std::size_t i = 0; i < x.size(); ++i) p += m[i] * v[i];
+  const Vec3 velocity = p / lumped.mass;
   // Best-fit rotation: the polar factor of sum m_i (x_i - c) r_i^T (shape matching).
   // Angular velocity: the nodes' angular momentum through their inertia (both about c).
-  Mat3 A = Mat3::Zero(), inertia = Mat3::Zero();
+  Mat3 A = Mat3::Zero();
   Vec3 L = Vec3::Zero();
   d.box = Aabb{};
   d.max_speed = 0;
   for (std::size_t i = 0; i < x.size(); ++i) {
     const Vec3 r = x[i] - c;
     A += m[i] * r * rest[i].transpose();
-    inertia += m[i] * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
     L += m[i] * r.cross(v[i] - velocity);
     d.box.extend(x[i]);
     d.max_speed = std::max(d.max_speed, v[i].norm());
@@ -1237,7 +1227,7 @@ void World::fit_deformable(Index slot) {
   b.rigid.position = c;
   b.rigid.orientation = q;
   b.rigid.linear_velocity = velocity;
-  b.rigid.angular_velocity = inertia.ldlt().solve(L);
+  b.rigid.angular_velocity = lumped.inertia.ldlt().solve(L);
   // The model shows the deformed shape in the body frame (copied first if a snapshot shares it).
   if (d.model.use_count() > 2) {
     d.model = std::make_shared<BodyModel>(*d.model);
@@ -1250,7 +1240,7 @@ void World::fit_deformable(Index slot) {
     model.surface.positions[k] = model.mesh.positions[static_cast<std::size_t>(model.surface.vertex_node[k])];
 }
 
-void World::push_nodes(Index slot, const Vec3& impulse, const Vec3& point) {
+Vec3 World::spread_impulse(Index slot, const Vec3& impulse, const Vec3& point) {
   Body& b = bodies_[slot];
   Body::Deformation& d = *b.deform;
   const std::vector<double>& m = b.model->fem.node_mass;
@@ -1285,8 +1275,7 @@ void World::push_nodes(Index slot, const Vec3& impulse, const Vec3& point) {
     v[node] += (w / total / m[node]) * impulse;
     centre += (w / total) * x[node];
   }
-  // The moment the patch's centre misses turns the whole body.
-  turn_nodes(slot, (point - centre).cross(impulse));
+  return (point - centre).cross(impulse);
 }
 
 void World::turn_nodes(Index slot, const Vec3& moment) {
@@ -1295,22 +1284,11 @@ void World::turn_nodes(Index slot, const Vec3& moment) {
   const std::vector<double>& m = b.model->fem.node_mass;
   std::vector<Vec3>& x = b.deform->nodes.x;
   std::vector<Vec3>& v = b.deform->nodes.v;
-  // dw = I^-1 H with I = sum m_i (|r_i|^2 1 - r_i r_i^T) about the centre of mass c; v_i += dw x r_i
-  // changes the angular momentum by I dw = H and the momentum by dw x sum m_i r_i = 0.
-  Vec3 c = Vec3::Zero();
-  double mass = 0;
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    c += m[i] * x[i];
-    mass += m[i];
-  }
-  c /= mass;
-  Mat3 inertia = Mat3::Zero();
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    const Vec3 r = x[i] - c;
-    inertia += m[i] * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
-  }
-  const Vec3 dw = inertia.ldlt().solve(moment);
-  for (std::size_t i = 0; i < x.size(); ++i) v[i] += dw.cross(x[i] - c);
+  // dw = I^-1 H with I the nodes' inertia about their centre of mass c; v_i += dw x r_i changes
+  // the angular momentum by I dw = H and the momentum by dw x sum m_i r_i = 0.
+  const MassProperties lumped = point_mass_properties(m, x);
+  const Vec3 dw = lumped.inertia.ldlt().solve(moment);
+  for (std::size_t i = 0; i < x.size(); ++i) v[i] += dw.cross(x[i] - lumped.center);
 }
 
 DynamicObstacles World::deformable_obstacles(Index slot) const {
@@ -1350,9 +1328,11 @@ void World::step_deformables() {
     Body::Deformation& d = *b.deform;
     // What the contact solver gave it through its contacts with other dynamic bodies, as impulses
     // on the nodes: each point's normal impulse there, the friction at the friction centre and the
-    // twist about the normal, all summed over the step (what the other body took, reversed).
+    // twist about the normal, all summed over the step (what the other body took, reversed). The
+    // moments the patches miss and the twists turn the whole body once, at the end.
     // (Its contacts with planes, static and kinematic bodies held it up in that solve, as a rigid
     // body; the FEM step below meets those obstacles itself.)
+    Vec3 moment = Vec3::Zero();
     for (const Contact& ct : contacts_) {
       if (ct.body_a != slot && ct.body_b != slot) continue;
       if (bodies_[ct.body_a == slot ? ct.body_b : ct.body_a].type != BodyType::dynamic) continue;
@@ -1361,13 +1341,16 @@ void World::step_deformables() {
       const double sign = ct.body_b == slot ? 1.0 : -1.0;  // the impulses act on B along +normal
       for (int i = 0; i < cc.count; ++i) {
         const ContactPoint& p = cc.points[i];
-        if (p.total_normal_impulse != 0) push_nodes(slot, sign * p.total_normal_impulse * cc.normal, p.position);
+        if (p.total_normal_impulse != 0)
+          moment += spread_impulse(slot, sign * p.total_normal_impulse * cc.normal, p.position);
       }
       // The friction centre: A's centre of mass at the step's start plus centre_a.
       const Vec3 centre = cc.points[0].position - cc.points[0].anchor_a + cc.centre_a;
-      if (cc.total_friction_impulse.squaredNorm() > 0) push_nodes(slot, sign * cc.total_friction_impulse, centre);
-      if (cc.total_twist_impulse != 0) turn_nodes(slot, sign * cc.total_twist_impulse * cc.normal);
+      if (cc.total_friction_impulse.squaredNorm() > 0)
+        moment += spread_impulse(slot, sign * cc.total_friction_impulse, centre);
+      moment += sign * cc.total_twist_impulse * cc.normal;
     }
+    turn_nodes(slot, moment);
     const DynamicObstacles obstacles = deformable_obstacles(slot);
     bool converged = true;
     for (int sub = 0; sub < d.substeps; ++sub) {
