@@ -45,6 +45,14 @@ Result<double> read_in_range(const Json& value, const Where& where, double lo, d
   return *v;
 }
 
+// An integer in [lo, hi].
+Result<int> read_int_in_range(const Json& value, const Where& where, int lo, int hi) {
+  SHATTER_TRY(v, json_input::read_integer(value, where));
+  if (*v < lo || *v > hi)
+    return where.error("expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  return static_cast<int>(*v);
+}
+
 Result<Quat> read_rotation(const Json& value, const Where& where) {
   ObjectReader r(value, where);
   if (!r.status().ok())
@@ -85,14 +93,12 @@ Result<ImpactSettings> read_impact(const Json& value, const Where& where, Impact
       *n.target = *v;
     }
   if (const Json* j = r.get("max_fragments")) {
-    SHATTER_TRY(v, json_input::read_integer(*j, where.key("max_fragments")));
-    if (*v < 1 || *v > 4096) return where.key("max_fragments").error("expected an integer in [1, 4096]");
-    base.max_fragments = static_cast<int>(*v);
+    SHATTER_TRY(v, read_int_in_range(*j, where.key("max_fragments"), 1, 4096));
+    base.max_fragments = *v;
   }
   if (const Json* j = r.get("max_cracks")) {
-    SHATTER_TRY(v, json_input::read_integer(*j, where.key("max_cracks")));
-    if (*v < 0 || *v > 64) return where.key("max_cracks").error("expected an integer in [0, 64]");
-    base.fracture.crack.max_cracks = static_cast<int>(*v);
+    SHATTER_TRY(v, read_int_in_range(*j, where.key("max_cracks"), 0, 64));
+    base.fracture.crack.max_cracks = *v;
   }
   if (const Json* j = r.get("hold")) {
     SHATTER_TRY(v, json_input::read_string(*j, where.key("hold")));
@@ -127,14 +133,12 @@ Result<std::optional<DeformableSettings>> read_deformable(const Json& value, con
     d.contact_stiffness = *v;
   }
   if (const Json* j = r.get("max_newton_iterations")) {
-    SHATTER_TRY(v, json_input::read_integer(*j, where.key("max_newton_iterations")));
-    if (*v < 1 || *v > 1000) return where.key("max_newton_iterations").error("expected an integer in [1, 1000]");
-    d.max_newton_iterations = static_cast<int>(*v);
+    SHATTER_TRY(v, read_int_in_range(*j, where.key("max_newton_iterations"), 1, 1000));
+    d.max_newton_iterations = *v;
   }
   if (const Json* j = r.get("substeps")) {
-    SHATTER_TRY(v, json_input::read_integer(*j, where.key("substeps")));
-    if (*v < 1 || *v > 1000) return where.key("substeps").error("expected an integer in [1, 1000]");
-    d.substeps = static_cast<int>(*v);
+    SHATTER_TRY(v, read_int_in_range(*j, where.key("substeps"), 1, 1000));
+    d.substeps = *v;
   }
   SHATTER_TRY(done, r.finish());
   return std::optional(d);
@@ -410,9 +414,8 @@ Result<Scene> parse_scene(std::string_view text, const std::string& file, const 
       scene.world.time_step = *v;
     }
     if (const Json* j = wr.get("substeps")) {
-      SHATTER_TRY(v, json_input::read_integer(*j, w.key("substeps")));
-      if (*v < 1 || *v > kMaxSubsteps) return w.key("substeps").error("expected an integer in [1, 1000]");
-      scene.world.substeps = static_cast<int>(*v);
+      SHATTER_TRY(v, read_int_in_range(*j, w.key("substeps"), 1, kMaxSubsteps));
+      scene.world.substeps = *v;
     }
     if (const Json* j = wr.get("gravity")) {
       SHATTER_TRY(v, json_input::read_vec3(*j, w.key("gravity")));
