@@ -82,7 +82,7 @@ float fbm(vec3 p) {
   return s;
 }
 // Solid textures in rest coordinates (m): the same at a point in every fragment of a body. One
-// formula for every grain, its numbers per grain as uniforms (grain_uniforms): llvmpipe runs both
+// formula for every grain, its numbers per grain as uniforms (set_grain): llvmpipe runs both
 // sides of every branch under a mask, so a branch per grain would cost every grain's noise.
 uniform vec3 u_in_noise;   // inside: base, amplitude, frequency (1/m) of fbm
 uniform float u_specks;    // inside: weight of dark specks (stone)
@@ -114,7 +114,6 @@ float shadow_factor(vec3 n) {
 }
 void main() {
   vec3 n = normalize(v_normal);
-  if (!gl_FrontFacing) n = -n;
   vec3 albedo;
   float gloss = u_gloss;
   if (u_view == 1) {
