@@ -26,7 +26,7 @@ struct FastTetData {
   /// Fixed blocks of tets (independent of the thread count). Each block accumulates its tets'
   /// forces into its own compact node buffer in tet order; nodes then gather their entries.
   std::int64_t block_size = 0;                 ///< tets per block
-  std::vector<std::int32_t> corner_slot;       ///< 3 x block-local node slot of each corner, i.e. the
+  std::vector<std::int32_t> corner_slot;       ///< 4 x block-local node slot of each corner, i.e. the
                                                ///< offset of its x component (#tets x 4)
   std::vector<std::int64_t> block_slot_begin;  ///< first slot of each block in the global slot
                                                ///< array (#blocks + 1)
@@ -65,11 +65,20 @@ void update_rest_shape(FemModel& model, const std::vector<Vec3>& rest_positions,
 /// Global internal force F(x) = sum_e F_e(x), N (#nodes), the straightforward way: per tet
 /// tet_internal_forces and a serial scatter-add in tet order. x: deformed positions, m (#nodes).
 void internal_forces_reference(const FemModel& model, const std::vector<Vec3>& x, std::vector<Vec3>& f);
-/// Scratch memory of internal_forces: one force slot per (block, node of the block), 3 doubles each
-/// (N). Keep one per caller to avoid reallocating; its contents mean nothing between calls.
+/// Scratch memory of internal_forces: one force slot per (block, node of the block), 4 doubles each
+/// (x, y, z, 0; N). Keep one per caller to avoid reallocating; its contents mean nothing between calls.
 struct ForceWorkspace {
-  std::vector<double> slots;  ///< 3 doubles per slot, N
+  std::vector<double> slots;  ///< 4 doubles per slot, N
 };
+
+/// The instructions the accelerated force kernels of internal_forces use: the build's baseline
+/// (SSE) or AVX2. Both give the same bits: the same operations in the same order, none fused.
+enum class ForceKernelIsa { baseline, avx2 };
+/// By default AVX2 where the CPU has it. Process-wide; for checking and timing. Asking for avx2 on a
+/// CPU without it gives baseline.
+void set_force_kernel_isa(ForceKernelIsa isa);
+/// The kernels internal_forces uses now.
+[[nodiscard]] ForceKernelIsa force_kernel_isa();
 
 /// The same, fast: fixed blocks of tets in parallel (stvk by specialised inline code on the compact
 /// rest data, the other models per tet); the result does not depend on the thread count (bitwise)

@@ -6,7 +6,9 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
+#include <cstring>
 
 #include "shatter/core/parallel.h"
 
@@ -68,7 +70,7 @@ void build_blocks(FemModel& model) {
           local[n] = static_cast<std::int32_t>(static_cast<std::int64_t>(slot_node.size()) - begin);
           slot_node.push_back(n);
         }
-        fd.corner_slot[static_cast<std::size_t>(4 * e + k)] = 3 * local[n];
+        fd.corner_slot[static_cast<std::size_t>(4 * e + k)] = 4 * local[n];
       }
     }
     for (std::int64_t s = begin; s < static_cast<std::int64_t>(slot_node.size()); ++s)
@@ -87,8 +89,8 @@ void build_blocks(FemModel& model) {
 }
 
 // Four tets at a time: every double below holds one value per lane (GCC vector extension; with
-// -ffp-contract=off each lane is computed exactly as the scalar formula would be, so the SSE2 and AVX2
-// versions give the same bits).
+// -ffp-contract=off each lane is computed exactly as the scalar formula would be, so the baseline and
+// AVX2 versions give the same bits).
 // Vectors only live inside the force kernels (loads are built in place; the always-inlined helpers
 // take them by pointer), so none crosses a call by value; GCC's -Wpsabi warns about the call ABI of
 // such vectors.
@@ -96,28 +98,81 @@ void build_blocks(FemModel& model) {
 #pragma GCC diagnostic ignored "-Wpsabi"
 typedef double Lanes __attribute__((vector_size(4 * sizeof(double))));
 
-// The kernels' shared steps. Always inlined into each target clone (the AVX2 clone then
-// compiles them for AVX2 too); they take vectors only by pointer.
+// The kernels' shared steps. Always inlined into each kernel (the AVX2 kernel then compiles them for
+// AVX2 too); they take vectors only by pointer.
 
-// c[lane][corner]: the corners of tets g0 .. g0 + 3; padding lanes repeat the first tet.
-[[gnu::always_inline]] inline void gather_corners(const TetIndices* tets, const Vec3* x, std::int64_t g0, int lanes,
-                                                  const Vec3* (&c)[4][4]) {
+// Node n as (x, y, z, w), w meaningless: one 32-byte load that also reads the next node's x, except
+// for the last node, which has no next node.
+[[gnu::always_inline]] inline void load_node(const Vec3* x, std::int64_t last_node, Index n, Lanes* p) {
+  const double* q = x[n].data();
+  if (n < last_node)
+    std::memcpy(p, q, sizeof(Lanes));
+  else
+    *p = Lanes{q[0], q[1], q[2], 0.0};
+}
+
+// r = a0 b0 + a1 b1 + a2 b2 per lane, left to right.
+[[gnu::always_inline]] inline void lane_dot3(const Lanes& a0, const Lanes& a1, const Lanes& a2, const Lanes& b0,
+                                             const Lanes& b1, const Lanes& b2, Lanes* r) {
+  *r = a0 * b0 + a1 * b1 + a2 * b2;
+}
+
+// The edges d_k = x_k - x_0 (k = 1, 2, 3) of the four tets g0 .. g0 + 3 as lane vectors
+// d[3 (k - 1) + axis]; padding lanes (from `lanes` on) repeat the first tet. Each lane's edge is
+// formed as (x, y, z, w) and the three are transposed to one vector per axis.
+[[gnu::always_inline]] inline void load_edges(const TetIndices* tets, const Vec3* x, std::int64_t last_node,
+                                              std::int64_t g0, int lanes, Lanes* d) {
+  Lanes e[3][4];  // [edge][lane]: (x, y, z, w)
+#pragma GCC unroll 4
   for (int l = 0; l < 4; ++l) {
     const TetIndices& t = tets[g0 + (l < lanes ? l : 0)];
-    for (int k = 0; k < 4; ++k) c[l][k] = &x[t[k]];
+    Lanes p0{}, pk{};  // set by load_node (GCC cannot see through its memcpy)
+    load_node(x, last_node, t[0], &p0);
+#pragma GCC unroll 4
+    for (int k = 1; k < 4; ++k) {
+      load_node(x, last_node, t[k], &pk);
+      e[k - 1][l] = pk - p0;
+    }
+  }
+#pragma GCC unroll 4
+  for (int k = 0; k < 3; ++k) {
+    const Lanes xz01 = __builtin_shufflevector(e[k][0], e[k][1], 0, 4, 2, 6);  // x0 x1 z0 z1
+    const Lanes yw01 = __builtin_shufflevector(e[k][0], e[k][1], 1, 5, 3, 7);  // y0 y1 w0 w1
+    const Lanes xz23 = __builtin_shufflevector(e[k][2], e[k][3], 0, 4, 2, 6);
+    const Lanes yw23 = __builtin_shufflevector(e[k][2], e[k][3], 1, 5, 3, 7);
+    d[3 * k] = __builtin_shufflevector(xz01, xz23, 0, 1, 4, 5);
+    d[3 * k + 1] = __builtin_shufflevector(yw01, yw23, 0, 1, 4, 5);
+    d[3 * k + 2] = __builtin_shufflevector(xz01, xz23, 2, 3, 6, 7);
   }
 }
 
-// Add the corner forces out[3 k + axis] (one lane per tet) into the block's slots, in tet order.
+// Add the corner forces out[3 k + axis] (one lane per tet) into the block's slots (x, y, z, 0 each),
+// in tet order: each lane's corner force is transposed to (fx, fy, fz, 0) and added as one vector.
 [[gnu::always_inline]] inline void scatter_corner_forces(const Lanes* out, const std::int32_t* corner_slot,
                                                          std::int64_t g0, int lanes, double* slots) {
+  const Lanes zero = Lanes{0, 0, 0, 0};
+  Lanes f[4][4];  // [lane][corner]: (fx, fy, fz, 0)
+#pragma GCC unroll 4
+  for (int k = 0; k < 4; ++k) {
+    const Lanes xy02 = __builtin_shufflevector(out[3 * k], out[3 * k + 1], 0, 4, 2, 6);  // x0 y0 x2 y2
+    const Lanes xy13 = __builtin_shufflevector(out[3 * k], out[3 * k + 1], 1, 5, 3, 7);  // x1 y1 x3 y3
+    const Lanes z02 = __builtin_shufflevector(out[3 * k + 2], zero, 0, 4, 2, 6);         // z0 0 z2 0
+    const Lanes z13 = __builtin_shufflevector(out[3 * k + 2], zero, 1, 5, 3, 7);         // z1 0 z3 0
+    f[0][k] = __builtin_shufflevector(xy02, z02, 0, 1, 4, 5);
+    f[1][k] = __builtin_shufflevector(xy13, z13, 0, 1, 4, 5);
+    f[2][k] = __builtin_shufflevector(xy02, z02, 2, 3, 6, 7);
+    f[3][k] = __builtin_shufflevector(xy13, z13, 2, 3, 6, 7);
+  }
+#pragma GCC unroll 4
   for (int l = 0; l < lanes; ++l) {
     const std::int32_t* cs = corner_slot + 4 * (g0 + l);
+#pragma GCC unroll 4
     for (int k = 0; k < 4; ++k) {
       double* s = slots + cs[k];
-      s[0] += out[3 * k][l];
-      s[1] += out[3 * k + 1][l];
-      s[2] += out[3 * k + 2][l];
+      Lanes sum;
+      std::memcpy(&sum, s, sizeof(Lanes));
+      sum += f[l][k];
+      std::memcpy(s, &sum, sizeof(Lanes));
     }
   }
 }
@@ -250,16 +305,25 @@ typedef long long LaneMask __attribute__((vector_size(4 * sizeof(long long))));
 
 }  // namespace
 
-// Edge k - 0 of each lane's tet along axis a (Ds built in registers: no store-to-load forwarding
-// stalls), and four consecutive packed values as one lane vector.
-// clang-format off
-#define SHATTER_EDGE(k, a) \
-  Lanes{(*c[0][k])[a] - (*c[0][0])[a], (*c[1][k])[a] - (*c[1][0])[a], \
-        (*c[2][k])[a] - (*c[2][0])[a], (*c[3][k])[a] - (*c[3][0])[a]}
-#define SHATTER_LOAD(p) Lanes{(p)[0], (p)[1], (p)[2], (p)[3]}
-// clang-format on
+// Four consecutive packed values as one lane vector.
+#define SHATTER_LOAD(p) \
+  Lanes { (p)[0], (p)[1], (p)[2], (p)[3] }
 
 namespace {
+
+// What every block kernel reads and writes: the packed rest data, the tets, their corners' slots,
+// the deformed positions (the last node is num_nodes - 1), the tets [lo, hi) of one block (lo a
+// multiple of 4), the Lame constants and the block's slots (4 doubles each, N).
+struct BlockArgs {
+  const double* packed;
+  const TetIndices* tets;
+  const std::int32_t* corner_slot;
+  const Vec3* x;
+  std::int64_t last_node;
+  std::int64_t lo, hi;
+  double mu, lambda;
+  double* slots;
+};
 
 // A group of four tets in their QR-rotated rest frames (StVK and corotated): R^-1 (upper
 // triangular), the rest volume V and F' = Ds R^-1 row-major, whose columns are a = d0 r00,
@@ -269,157 +333,183 @@ struct RotatedFrame {
   Lanes F[9];
 };
 
-[[gnu::always_inline]] inline void load_rotated_frame(const double* packed, const Vec3* (&c)[4][4], std::int64_t g0,
-                                                      RotatedFrame* f) {
-  const double* r = packed + 7 * g0;  // 7 lane vectors per group of 4 tets
+[[gnu::always_inline]] inline void load_rotated_frame(const BlockArgs& a, std::int64_t g0, int lanes, RotatedFrame* f) {
+  const double* r = a.packed + 7 * g0;  // 7 lane vectors per group of 4 tets
   f->r00 = SHATTER_LOAD(r), f->r01 = SHATTER_LOAD(r + 4), f->r02 = SHATTER_LOAD(r + 8);
   f->r11 = SHATTER_LOAD(r + 12), f->r12 = SHATTER_LOAD(r + 16), f->r22 = SHATTER_LOAD(r + 20);
   f->vol = SHATTER_LOAD(r + 24);
-  const Lanes d0x = SHATTER_EDGE(1, 0), d0y = SHATTER_EDGE(1, 1), d0z = SHATTER_EDGE(1, 2);
-  const Lanes d1x = SHATTER_EDGE(2, 0), d1y = SHATTER_EDGE(2, 1), d1z = SHATTER_EDGE(2, 2);
-  const Lanes d2x = SHATTER_EDGE(3, 0), d2y = SHATTER_EDGE(3, 1), d2z = SHATTER_EDGE(3, 2);
+  Lanes d[9];  // d[3 k + axis]: edge k + 1
+  load_edges(a.tets, a.x, a.last_node, g0, lanes, d);
   const Lanes &r00 = f->r00, &r01 = f->r01, &r02 = f->r02, &r11 = f->r11, &r12 = f->r12, &r22 = f->r22;
-  f->F[0] = d0x * r00, f->F[1] = d0x * r01 + d1x * r11, f->F[2] = d0x * r02 + d1x * r12 + d2x * r22;
-  f->F[3] = d0y * r00, f->F[4] = d0y * r01 + d1y * r11, f->F[5] = d0y * r02 + d1y * r12 + d2y * r22;
-  f->F[6] = d0z * r00, f->F[7] = d0z * r01 + d1z * r11, f->F[8] = d0z * r02 + d1z * r12 + d2z * r22;
+#pragma GCC unroll 4
+  for (int i = 0; i < 3; ++i) {
+    f->F[3 * i] = d[i] * r00;
+    f->F[3 * i + 1] = d[i] * r01 + d[3 + i] * r11;
+    f->F[3 * i + 2] = d[i] * r02 + d[3 + i] * r12 + d[6 + i] * r22;
+  }
 }
 
 // The corner forces out[3 k + axis] from M = V P' (row-major): [f1 f2 f3] = M R^-T with R^-1
 // upper triangular, f0 = -(f1 + f2 + f3).
 [[gnu::always_inline]] inline void rotated_frame_forces(const Lanes* M, const RotatedFrame& f, Lanes* out) {
-  const Lanes f1x = M[0] * f.r00 + M[1] * f.r01 + M[2] * f.r02, f1y = M[3] * f.r00 + M[4] * f.r01 + M[5] * f.r02,
-              f1z = M[6] * f.r00 + M[7] * f.r01 + M[8] * f.r02;
-  const Lanes f2x = M[1] * f.r11 + M[2] * f.r12, f2y = M[4] * f.r11 + M[5] * f.r12, f2z = M[7] * f.r11 + M[8] * f.r12;
-  const Lanes f3x = M[2] * f.r22, f3y = M[5] * f.r22, f3z = M[8] * f.r22;
-  out[0] = -(f1x + f2x + f3x), out[1] = -(f1y + f2y + f3y), out[2] = -(f1z + f2z + f3z);
-  out[3] = f1x, out[4] = f1y, out[5] = f1z, out[6] = f2x, out[7] = f2y, out[8] = f2z;
-  out[9] = f3x, out[10] = f3y, out[11] = f3z;
+#pragma GCC unroll 4
+  for (int i = 0; i < 3; ++i) {
+    const Lanes f1 = M[3 * i] * f.r00 + M[3 * i + 1] * f.r01 + M[3 * i + 2] * f.r02;
+    const Lanes f2 = M[3 * i + 1] * f.r11 + M[3 * i + 2] * f.r12;
+    const Lanes f3 = M[3 * i + 2] * f.r22;
+    out[i] = -(f1 + f2 + f3);
+    out[3 + i] = f1, out[6 + i] = f2, out[9 + i] = f3;
+  }
 }
 
-}  // namespace
-
-namespace detail {
-
-// StVK forces of the tets [lo, hi) of one block (lo a multiple of 4) in their QR-rotated rest frames
-// (docs/method.md §2.1-2.2, §3): F' = Ds R^-1, S' = 2 mu E' + lambda tr(E') I, H = V F' S' R^-T,
-// [f1 f2 f3] = H, f0 = -(f1 + f2 + f3); added into the block's slots in tet order.
-[[gnu::target_clones("avx2", "default")]]
-void stvk_forces_block(const double* packed, const TetIndices* tets, const std::int32_t* corner_slot, const Vec3* x,
-                       std::int64_t lo, std::int64_t hi, double mu, double lambda, double* slots) {
-  for (std::int64_t g0 = lo; g0 < hi; g0 += 4) {
-    const int lanes = static_cast<int>(std::min<std::int64_t>(4, hi - g0));
-    const Vec3* c[4][4];  // [lane][corner]
-    gather_corners(tets, x, g0, lanes, c);
+// StVK forces of one block's tets in their QR-rotated rest frames (docs/method.md §2.1-2.2, §3):
+// F' = Ds R^-1, S' = 2 mu E' + lambda tr(E') I, H = V F' S' R^-T, [f1 f2 f3] = H,
+// f0 = -(f1 + f2 + f3); added into the block's slots in tet order.
+[[gnu::always_inline]] inline void stvk_forces_block(const BlockArgs& a) {
+  for (std::int64_t g0 = a.lo; g0 < a.hi; g0 += 4) {
+    const int lanes = static_cast<int>(std::min<std::int64_t>(4, a.hi - g0));
     RotatedFrame f;
-    load_rotated_frame(packed, c, g0, &f);
+    load_rotated_frame(a, g0, lanes, &f);
     const Lanes& vol = f.vol;
     // F' columns a, b, c.
     const Lanes &ax = f.F[0], &bx = f.F[1], &cx = f.F[2], &ay = f.F[3], &by = f.F[4], &cy = f.F[5], &az = f.F[6],
                 &bz = f.F[7], &cz = f.F[8];
-    // C = F'^T F'.
-    const Lanes caa = ax * ax + ay * ay + az * az, cbb = bx * bx + by * by + bz * bz, ccc = cx * cx + cy * cy + cz * cz;
-    const Lanes cab = ax * bx + ay * by + az * bz, cac = ax * cx + ay * cy + az * cz, cbc = bx * cx + by * cy + bz * cz;
+    // C = F'^T F': dot products of the columns.
+    Lanes caa, cbb, ccc, cab, cac, cbc;
+    lane_dot3(ax, ay, az, ax, ay, az, &caa);
+    lane_dot3(bx, by, bz, bx, by, bz, &cbb);
+    lane_dot3(cx, cy, cz, cx, cy, cz, &ccc);
+    lane_dot3(ax, ay, az, bx, by, bz, &cab);
+    lane_dot3(ax, ay, az, cx, cy, cz, &cac);
+    lane_dot3(bx, by, bz, cx, cy, cz, &cbc);
     // V S' = V (mu (C - I) + lambda/2 (tr C - 3) I).
-    const Lanes vmu = vol * mu, vlh = vol * (0.5 * lambda);
+    const Lanes vmu = vol * a.mu, vlh = vol * (0.5 * a.lambda);
     const Lanes ltr = vlh * (caa + cbb + ccc - 3.0);
     const Lanes shift = ltr - vmu;
     const Lanes saa = vmu * caa + shift, sbb = vmu * cbb + shift, scc = vmu * ccc + shift;
     const Lanes sab = vmu * cab, sac = vmu * cac, sbc = vmu * cbc;
-    // F' (V S'), columns p, q, s.
-    const Lanes px = ax * saa + bx * sab + cx * sac, py = ay * saa + by * sab + cy * sac,
-                pz = az * saa + bz * sab + cz * sac;
-    const Lanes qx = ax * sab + bx * sbb + cx * sbc, qy = ay * sab + by * sbb + cy * sbc,
-                qz = az * sab + bz * sbb + cz * sbc;
-    const Lanes sx = ax * sac + bx * sbc + cx * scc, sy = ay * sac + by * sbc + cy * scc,
-                sz = az * sac + bz * sbc + cz * scc;
-    // H = F' V S' R^-T (columns p, q, s of F' V S').
-    const Lanes M[9] = {px, qx, sx, py, qy, sy, pz, qz, sz};
+    // M = F' (V S'), row-major; H = M R^-T.
+    Lanes M[9];
+#pragma GCC unroll 4
+    for (int i = 0; i < 3; ++i) {
+      const Lanes &fa = f.F[3 * i], &fb = f.F[3 * i + 1], &fc = f.F[3 * i + 2];
+      lane_dot3(fa, fb, fc, saa, sab, sac, &M[3 * i]);
+      lane_dot3(fa, fb, fc, sab, sbb, sbc, &M[3 * i + 1]);
+      lane_dot3(fa, fb, fc, sac, sbc, scc, &M[3 * i + 2]);
+    }
     Lanes out[12];
     rotated_frame_forces(M, f, out);
-    scatter_corner_forces(out, corner_slot, g0, lanes, slots);
+    scatter_corner_forces(out, a.corner_slot, g0, lanes, a.slots);
   }
 }
 
-// Linear (small-strain) forces of the tets [lo, hi) of one block (lo a multiple of 4): F = Ds Dm^-1,
-// eps = (F + F^T)/2 - I, V P = V (2 mu eps + lambda tr(eps) I), [f1 f2 f3] = V P Dm^-T,
-// f0 = -(f1 + f2 + f3); added into the block's slots in tet order (docs/method.md §2.2).
-[[gnu::target_clones("avx2", "default")]]
-void linear_forces_block(const double* packed, const TetIndices* tets, const std::int32_t* corner_slot, const Vec3* x,
-                         std::int64_t lo, std::int64_t hi, double mu, double lambda, double* slots) {
-  for (std::int64_t g0 = lo; g0 < hi; g0 += 4) {
-    const int lanes = static_cast<int>(std::min<std::int64_t>(4, hi - g0));
-    const Vec3* c[4][4];  // [lane][corner]
-    gather_corners(tets, x, g0, lanes, c);
-    const double* r = packed + 10 * g0;  // 10 lane vectors per group of 4 tets
-    // M = Dm^-1, row-major.
-    const Lanes m00 = SHATTER_LOAD(r), m01 = SHATTER_LOAD(r + 4), m02 = SHATTER_LOAD(r + 8);
-    const Lanes m10 = SHATTER_LOAD(r + 12), m11 = SHATTER_LOAD(r + 16), m12 = SHATTER_LOAD(r + 20);
-    const Lanes m20 = SHATTER_LOAD(r + 24), m21 = SHATTER_LOAD(r + 28), m22 = SHATTER_LOAD(r + 32);
+// Linear (small-strain) forces of one block's tets: F = Ds Dm^-1, eps = (F + F^T)/2 - I,
+// V P = V (2 mu eps + lambda tr(eps) I), [f1 f2 f3] = V P Dm^-T, f0 = -(f1 + f2 + f3); added into
+// the block's slots in tet order (docs/method.md §2.2).
+[[gnu::always_inline]] inline void linear_forces_block(const BlockArgs& a) {
+  for (std::int64_t g0 = a.lo; g0 < a.hi; g0 += 4) {
+    const int lanes = static_cast<int>(std::min<std::int64_t>(4, a.hi - g0));
+    const double* r = a.packed + 10 * g0;  // 10 lane vectors per group of 4 tets
+    // m = Dm^-1, row-major.
+    Lanes m[9];
+#pragma GCC unroll 9
+    for (int i = 0; i < 9; ++i) m[i] = SHATTER_LOAD(r + 4 * i);
     const Lanes vol = SHATTER_LOAD(r + 36);
-    // Ds columns d0 d1 d2 (edges from corner 0).
-    const Lanes d0x = SHATTER_EDGE(1, 0), d0y = SHATTER_EDGE(1, 1), d0z = SHATTER_EDGE(1, 2);
-    const Lanes d1x = SHATTER_EDGE(2, 0), d1y = SHATTER_EDGE(2, 1), d1z = SHATTER_EDGE(2, 2);
-    const Lanes d2x = SHATTER_EDGE(3, 0), d2y = SHATTER_EDGE(3, 1), d2z = SHATTER_EDGE(3, 2);
-    // F = Ds M: F(i, j) = d0_i m0j + d1_i m1j + d2_i m2j.
-    const Lanes fxx = d0x * m00 + d1x * m10 + d2x * m20, fxy = d0x * m01 + d1x * m11 + d2x * m21,
-                fxz = d0x * m02 + d1x * m12 + d2x * m22;
-    const Lanes fyx = d0y * m00 + d1y * m10 + d2y * m20, fyy = d0y * m01 + d1y * m11 + d2y * m21,
-                fyz = d0y * m02 + d1y * m12 + d2y * m22;
-    const Lanes fzx = d0z * m00 + d1z * m10 + d2z * m20, fzy = d0z * m01 + d1z * m11 + d2z * m21,
-                fzz = d0z * m02 + d1z * m12 + d2z * m22;
+    Lanes d[9];  // Ds columns d0 d1 d2 (edges from corner 0): d[3 k + axis]
+    load_edges(a.tets, a.x, a.last_node, g0, lanes, d);
+    // F = Ds m: F(i, j) = d0_i m0j + d1_i m1j + d2_i m2j.
+    Lanes F[9];
+#pragma GCC unroll 4
+    for (int i = 0; i < 3; ++i)
+#pragma GCC unroll 4
+      for (int j = 0; j < 3; ++j) lane_dot3(d[i], d[3 + i], d[6 + i], m[j], m[3 + j], m[6 + j], &F[3 * i + j]);
     // V P, symmetric: diagonal 2 mu V (F_ii - 1) + lambda V tr(eps), off-diagonal mu V (F_ij + F_ji).
-    const Lanes vmu = vol * mu, vl = vol * lambda;
-    const Lanes ltr = vl * ((fxx - 1.0) + (fyy - 1.0) + (fzz - 1.0));
-    const Lanes pxx = 2.0 * vmu * (fxx - 1.0) + ltr, pyy = 2.0 * vmu * (fyy - 1.0) + ltr,
-                pzz = 2.0 * vmu * (fzz - 1.0) + ltr;
-    const Lanes pxy = vmu * (fxy + fyx), pxz = vmu * (fxz + fzx), pyz = vmu * (fyz + fzy);
-    // f_k (k = 1, 2, 3) = V P M^T column k-1, i.e. V P (row k-1 of M).
-    const Lanes f1x = pxx * m00 + pxy * m01 + pxz * m02, f1y = pxy * m00 + pyy * m01 + pyz * m02,
-                f1z = pxz * m00 + pyz * m01 + pzz * m02;
-    const Lanes f2x = pxx * m10 + pxy * m11 + pxz * m12, f2y = pxy * m10 + pyy * m11 + pyz * m12,
-                f2z = pxz * m10 + pyz * m11 + pzz * m12;
-    const Lanes f3x = pxx * m20 + pxy * m21 + pxz * m22, f3y = pxy * m20 + pyy * m21 + pyz * m22,
-                f3z = pxz * m20 + pyz * m21 + pzz * m22;
-    const Lanes out[12] = {
-        -(f1x + f2x + f3x), -(f1y + f2y + f3y), -(f1z + f2z + f3z), f1x, f1y, f1z, f2x, f2y, f2z, f3x, f3y, f3z};
-    scatter_corner_forces(out, corner_slot, g0, lanes, slots);
+    const Lanes vmu = vol * a.mu, vl = vol * a.lambda;
+    const Lanes ltr = vl * ((F[0] - 1.0) + (F[4] - 1.0) + (F[8] - 1.0));
+    Lanes P[9];
+#pragma GCC unroll 4
+    for (int i = 0; i < 3; ++i) P[4 * i] = 2.0 * vmu * (F[4 * i] - 1.0) + ltr;
+    P[1] = P[3] = vmu * (F[1] + F[3]);
+    P[2] = P[6] = vmu * (F[2] + F[6]);
+    P[5] = P[7] = vmu * (F[5] + F[7]);
+    // f_k (k = 1, 2, 3) = V P (row k - 1 of m).
+    Lanes out[12];
+#pragma GCC unroll 4
+    for (int k = 1; k < 4; ++k)
+#pragma GCC unroll 4
+      for (int i = 0; i < 3; ++i)
+        lane_dot3(P[3 * i], P[3 * i + 1], P[3 * i + 2], m[3 * (k - 1)], m[3 * (k - 1) + 1], m[3 * (k - 1) + 2],
+                  &out[3 * k + i]);
+#pragma GCC unroll 4
+    for (int i = 0; i < 3; ++i) out[i] = -(out[3 + i] + out[6 + i] + out[9 + i]);
+    scatter_corner_forces(out, a.corner_slot, g0, lanes, a.slots);
   }
 }
 
-// Corotated forces of the tets [lo, hi) of one block (lo a multiple of 4) in their QR-rotated rest
-// frames, like StVK's: F' = Ds R^-1 = F Q^T has the polar rotation R Q^T and the same S up to Q,
-// so P' = 2 mu (F' - R') + lambda tr(R'^T F' - I) R' = P Q^T and H = V P' R^-T = V P Dm^-T
+// Corotated forces of one block's tets in their QR-rotated rest frames, like StVK's: F' = Ds R^-1 =
+// F Q^T has the polar rotation R Q^T and the same S up to Q, so
+// P' = 2 mu (F' - R') + lambda tr(R'^T F' - I) R' = P Q^T and H = V P' R^-T = V P Dm^-T
 // (docs/method.md §2.2); f0 = -(f1 + f2 + f3); added into the block's slots in tet order.
-[[gnu::target_clones("avx2", "default")]]
-void corotated_forces_block(const double* packed, const TetIndices* tets, const std::int32_t* corner_slot,
-                            const Vec3* x, std::int64_t lo, std::int64_t hi, double mu, double lambda, double* slots) {
-  for (std::int64_t g0 = lo; g0 < hi; g0 += 4) {
-    const int lanes = static_cast<int>(std::min<std::int64_t>(4, hi - g0));
-    const Vec3* c[4][4];  // [lane][corner]
-    gather_corners(tets, x, g0, lanes, c);
+[[gnu::always_inline]] inline void corotated_forces_block(const BlockArgs& a) {
+  for (std::int64_t g0 = a.lo; g0 < a.hi; g0 += 4) {
+    const int lanes = static_cast<int>(std::min<std::int64_t>(4, a.hi - g0));
     RotatedFrame f;
-    load_rotated_frame(packed, c, g0, &f);
+    load_rotated_frame(a, g0, lanes, &f);
     const Lanes* F = f.F;
     Lanes R[9];
     lane_polar_rotation(F, lanes, R);
     // V P' = 2 mu V (F' - R') + lambda V (tr(R'^T F') - 3) R'.
     Lanes tr = R[0] * F[0];
+#pragma GCC unroll 9
     for (int i = 1; i < 9; ++i) tr += R[i] * F[i];
-    const Lanes vmu2 = f.vol * (2.0 * mu), vlt = f.vol * lambda * (tr - 3.0);
+    const Lanes vmu2 = f.vol * (2.0 * a.mu), vlt = f.vol * a.lambda * (tr - 3.0);
     Lanes P[9];
+#pragma GCC unroll 9
     for (int i = 0; i < 9; ++i) P[i] = vmu2 * (F[i] - R[i]) + vlt * R[i];
     Lanes out[12];
     rotated_frame_forces(P, f, out);  // H = V P' R^-T
-    scatter_corner_forces(out, corner_slot, g0, lanes, slots);
+    scatter_corner_forces(out, a.corner_slot, g0, lanes, a.slots);
   }
 }
 
-}  // namespace detail
-#undef SHATTER_EDGE
+// Each kernel twice: for AVX2, and for the baseline (x86-64-v2 here). Same source, same
+// operations, same bits; force_kernel_isa picks one.
+#define SHATTER_KERNEL_PAIR(name)                                           \
+  [[gnu::target("avx2")]] void name##_avx2(const BlockArgs& a) { name(a); } \
+  void name##_baseline(const BlockArgs& a) { name(a); }
+SHATTER_KERNEL_PAIR(stvk_forces_block)
+SHATTER_KERNEL_PAIR(linear_forces_block)
+SHATTER_KERNEL_PAIR(corotated_forces_block)
+#undef SHATTER_KERNEL_PAIR
+
+}  // namespace
 #undef SHATTER_LOAD
 #undef SHATTER_LANE_MAX
 #undef SHATTER_LANE_SQRT
 #pragma GCC diagnostic pop
+
+namespace {
+
+bool cpu_has_avx2() {
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2");
+}
+
+// 0 = automatic (AVX2 where the CPU has it), else ForceKernelIsa + 1.
+std::atomic<int> g_force_kernel_isa{0};
+
+}  // namespace
+
+void set_force_kernel_isa(ForceKernelIsa isa) {
+  g_force_kernel_isa.store(isa == ForceKernelIsa::avx2 && !cpu_has_avx2() ? 1 : static_cast<int>(isa) + 1);
+}
+
+ForceKernelIsa force_kernel_isa() {
+  static const bool has_avx2 = cpu_has_avx2();
+  const int chosen = g_force_kernel_isa.load();
+  if (chosen == 0) return has_avx2 ? ForceKernelIsa::avx2 : ForceKernelIsa::baseline;
+  return static_cast<ForceKernelIsa>(chosen - 1);
+}
 
 FemModel make_fem_model(const TetMesh& rest_mesh, const Material& material, ModelKind kind) {
   FemModel model;
@@ -486,33 +576,38 @@ void internal_forces(const FemModel& model, const std::vector<Vec3>& x, std::vec
   const FastTetData& fd = model.fast;
   const std::int64_t n_tets = model.num_tets();
   const std::int64_t n_blocks = static_cast<std::int64_t>(fd.block_slot_begin.size()) - 1;
-  std::vector<double>& scratch = workspace.slots;  // 3 doubles per slot, N
+  std::vector<double>& scratch = workspace.slots;  // 4 doubles per slot, N
   const std::size_t n_slots = static_cast<std::size_t>(fd.block_slot_begin.back());
-  if (scratch.size() < 3 * n_slots) scratch.resize(3 * n_slots);
+  if (scratch.size() < 4 * n_slots) scratch.resize(4 * n_slots);
   double* acc = scratch.data();
   const Vec3* xp = x.data();
+  using Kernel = void (*)(const BlockArgs&);
+  const bool avx2 = force_kernel_isa() == ForceKernelIsa::avx2;
+  Kernel kernel = nullptr;
+  if (model.model == ModelKind::stvk) kernel = avx2 ? stvk_forces_block_avx2 : stvk_forces_block_baseline;
+  if (model.model == ModelKind::linear) kernel = avx2 ? linear_forces_block_avx2 : linear_forces_block_baseline;
+  if (model.model == ModelKind::corotated)
+    kernel = avx2 ? corotated_forces_block_avx2 : corotated_forces_block_baseline;
   // 1. Per block, in tet order: tet forces added into the block's own slots.
   parallel_for(
       0, n_blocks,
       [&](std::int64_t b) {
-        double* slots = acc + 3 * fd.block_slot_begin[static_cast<std::size_t>(b)];
+        double* slots = acc + 4 * fd.block_slot_begin[static_cast<std::size_t>(b)];
         const std::int64_t n_block_slots =
             fd.block_slot_begin[static_cast<std::size_t>(b) + 1] - fd.block_slot_begin[static_cast<std::size_t>(b)];
-        std::fill(slots, slots + 3 * n_block_slots, 0.0);
+        std::fill(slots, slots + 4 * n_block_slots, 0.0);
         const std::int64_t lo = b * fd.block_size, hi = std::min(n_tets, lo + fd.block_size);
-        if (model.model == ModelKind::stvk) {
-          detail::stvk_forces_block(fd.packed.data(), model.tets.data(), fd.corner_slot.data(), xp, lo, hi,
-                                    model.lame.mu, model.lame.lambda, slots);
-          return;
-        }
-        if (model.model == ModelKind::linear) {
-          detail::linear_forces_block(fd.packed.data(), model.tets.data(), fd.corner_slot.data(), xp, lo, hi,
-                                      model.lame.mu, model.lame.lambda, slots);
-          return;
-        }
-        if (model.model == ModelKind::corotated) {
-          detail::corotated_forces_block(fd.packed.data(), model.tets.data(), fd.corner_slot.data(), xp, lo, hi,
-                                         model.lame.mu, model.lame.lambda, slots);
+        if (kernel != nullptr) {
+          kernel(BlockArgs{.packed = fd.packed.data(),
+                           .tets = model.tets.data(),
+                           .corner_slot = fd.corner_slot.data(),
+                           .x = xp,
+                           .last_node = model.num_nodes - 1,
+                           .lo = lo,
+                           .hi = hi,
+                           .mu = model.lame.mu,
+                           .lambda = model.lame.lambda,
+                           .slots = slots});
           return;
         }
         for (std::int64_t e = lo; e < hi; ++e) {
@@ -535,7 +630,7 @@ void internal_forces(const FemModel& model, const std::vector<Vec3>& x, std::vec
     double sx = 0, sy = 0, sz = 0;
     for (std::int64_t i = fd.node_entry_begin[static_cast<std::size_t>(n)];
          i < fd.node_entry_begin[static_cast<std::size_t>(n) + 1]; ++i) {
-      const double* s = acc + 3 * fd.node_entry_slot[static_cast<std::size_t>(i)];
+      const double* s = acc + 4 * fd.node_entry_slot[static_cast<std::size_t>(i)];
       sx += s[0];
       sy += s[1];
       sz += s[2];
