@@ -130,11 +130,18 @@ NodeTets node_tets(const TetMesh& mesh) {
 
 Index face_neighbor(const TetMesh& mesh, const NodeTets& incidence, Index e, int k) {
   const TetIndices& t = mesh.tets[e];
-  const auto a = incidence.of(t[kTetFaces[k][0]]);
-  const auto b = incidence.of(t[kTetFaces[k][1]]);
-  const auto c = incidence.of(t[kTetFaces[k][2]]);
-  for (Index n : a)
-    if (n != e && std::binary_search(b.begin(), b.end(), n) && std::binary_search(c.begin(), c.end(), n)) return n;
+  // Walk the tets of the face's node with the fewest (each list is in ascending tet order) and
+  // look for the other two nodes among each tet's four: no searches in the other lists.
+  std::array<Index, 3> v{t[kTetFaces[k][0]], t[kTetFaces[k][1]], t[kTetFaces[k][2]]};
+  for (int i = 1; i < 3; ++i)
+    if (incidence.of(v[i]).size() < incidence.of(v[0]).size()) std::swap(v[0], v[i]);
+  for (Index n : incidence.of(v[0])) {
+    if (n == e) continue;
+    const TetIndices& u = mesh.tets[n];
+    const bool has1 = u[0] == v[1] || u[1] == v[1] || u[2] == v[1] || u[3] == v[1];
+    const bool has2 = u[0] == v[2] || u[1] == v[2] || u[2] == v[2] || u[3] == v[2];
+    if (has1 && has2) return n;
+  }
   return -1;
 }
 
