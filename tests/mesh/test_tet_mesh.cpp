@@ -76,6 +76,23 @@ TEST(Topology, NeighborsAreSymmetric) {
   EXPECT_TRUE(f.overshared.empty());
 }
 
+// The local query (node incidence) finds the same neighbour as the global face sort, on both box
+// patterns and at the boundary (-1).
+TEST(Topology, FaceNeighborMatchesTheFaceSort) {
+  for (auto pattern : {BoxMeshDef::Pattern::six, BoxMeshDef::Pattern::five}) {
+    const TetMesh m = make_box_mesh({.cells = {4, 3, 3}, .pattern = pattern, .jitter = 0.2});
+    const TetFaces f = compute_faces(m);
+    const NodeTets incidence = node_tets(m);
+    int boundary = 0;
+    for (Index e = 0; e < m.num_tets(); ++e)
+      for (int k = 0; k < 4; ++k) {
+        EXPECT_EQ(face_neighbor(m, incidence, e, k), f.neighbor(e, k)) << "tet " << e << " face " << k;
+        boundary += f.neighbor(e, k) < 0;
+      }
+    EXPECT_GT(boundary, 0);
+  }
+}
+
 TEST(Components, SeparatesDisjointParts) {
   TetMesh m = unit_tet();
   m.positions.push_back(Vec3(5, 0, 0));
