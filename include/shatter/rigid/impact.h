@@ -38,7 +38,8 @@ struct ImpactContact {
 /// How the body is held for the static solve.
 enum class ImpactHold : std::uint8_t {
   /// The paper: every tet whose centroid is farther than r_coll from all loaded contacts is held
-  /// in place; the held far field stands in for the body's inertia.
+  /// in place; the held far field stands in for the body's inertia. Where that is less than a
+  /// twentieth of the tets (contacts along most of a long piece), inertia relief instead.
   anchor_far,
   /// Inertia relief (as in structural FEA codes): body forces -m_i (a + alpha x r_i) balance the
   /// load, and three far nodes are held against drift; their reactions are near zero.

@@ -88,6 +88,16 @@ std::vector<AnchorMask> hold_far(const TetMesh& mesh, const std::vector<LocalLoa
   return anchors;
 }
 
+// Whether the far field of hold_far is a hold: at least a twentieth of the tets have all four
+// corners held.
+bool holds_enough(const TetMesh& mesh, const std::vector<AnchorMask>& anchors) {
+  Index held = 0;
+  for (const TetIndices& t : mesh.tets)
+    held += anchors[t[0]] != anchor_none && anchors[t[1]] != anchor_none && anchors[t[2]] != anchor_none &&
+            anchors[t[3]] != anchor_none;
+  return 20 * held >= mesh.num_tets();
+}
+
 // Inertia relief: body forces that balance the load's force and moment about the centre of the
 // lumped masses (f_i = -m_i (a + alpha x r_i)), and three far, spread nodes held.
 std::vector<AnchorMask> hold_inertia_relief(const TetMesh& mesh, const FemModel& fem, const Vec3& load_point,
@@ -320,10 +330,19 @@ Result<void> respond(const BodyModel& model, BodyState& state, const std::vector
   for (const LocalLoad& l : loads) total_weight += l.impulse;
   // Hold the body and solve its static response.
   StaticProblem problem;
-  if (settings.hold == ImpactHold::anchor_far) {
+  bool relief = settings.hold == ImpactHold::inertia_relief;
+  if (!relief) {
     result.collision_radius = settings.collision_radius * body_radius;
     problem.anchors = hold_far(model.mesh, loads, result.collision_radius);
-  } else {
+    // Contacts along most of a long piece (landing flat) leave only its end beyond r_coll: that
+    // end would clamp the piece rather than stand in for its inertia, and the piece would swing
+    // about it under the load. Such a piece is held by inertia relief instead.
+    if (!holds_enough(model.mesh, problem.anchors)) {
+      relief = true;
+      result.collision_radius = 0;
+    }
+  }
+  if (relief) {
     Vec3 local_load_point = Vec3::Zero();
     for (const LocalLoad& l : loads) local_load_point += (l.impulse / total_weight) * l.point;
     problem.anchors = hold_inertia_relief(model.mesh, model.fem, local_load_point, forces);
