@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numeric>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -20,7 +21,6 @@ constexpr const char* kMainVs = R"(#version 330 core
 layout(location = 0) in vec3 a_pos;     // body frame, m
 layout(location = 1) in vec3 a_normal;  // body frame
 layout(location = 2) in vec3 a_rest;    // rest coordinates for solid textures, m
-layout(location = 3) in float a_crack;  // 1 on faces a crack opened
 layout(location = 4) in float a_stress; // display stress of the face's tet, Pa
 uniform mat4 u_model;
 uniform mat4 u_view_proj;
@@ -29,7 +29,6 @@ uniform float u_stress_inv_scale;
 out vec3 v_world;
 out vec3 v_normal;
 out vec3 v_rest;
-out float v_crack;
 out float v_stress;
 out vec4 v_light;
 void main() {
@@ -37,25 +36,25 @@ void main() {
   v_world = w.xyz;
   v_normal = mat3(u_model) * a_normal;
   v_rest = a_rest;
-  v_crack = a_crack;
   v_stress = a_stress * u_stress_inv_scale;
   v_light = u_light_vp * w;
   gl_Position = u_view_proj * w;
 }
 )";
 
-constexpr const char* kMainFs = R"(#version 330 core
+// Compiled three times, with PART 0 for a body's outer faces, 1 for the faces its cracks opened and 2
+// for the stress view: llvmpipe runs both sides of every branch under a mask, so one shader with a
+// branch per kind of face would pay every fragment for the crack faces' four octaves of noise.
+constexpr const char* kMainFs = R"(
 in vec3 v_world;
 in vec3 v_normal;
 in vec3 v_rest;
-in float v_crack;
 in float v_stress;
 in vec4 v_light;
 uniform vec3 u_eye;
 uniform vec3 u_light_dir;
 uniform sampler2DShadow u_shadow;
 uniform int u_use_shadow;
-uniform int u_view;       // 0 material, 1 stress
 uniform vec3 u_outside;
 uniform vec3 u_inside;
 uniform float u_gloss;
@@ -114,18 +113,17 @@ float shadow_factor(vec3 n) {
 }
 void main() {
   vec3 n = normalize(v_normal);
-  vec3 albedo;
+#if PART == 2
+  float t = clamp(abs(v_stress), 0.0, 1.0);
+  vec3 albedo = v_stress >= 0.0 ? mix(vec3(0.8), vec3(0.85, 0.03, 0.02), t) : mix(vec3(0.8), vec3(0.05, 0.7, 0.08), t);
+  float gloss = 0.1;
+#elif PART == 1
+  vec3 albedo = inside_color(v_rest);
+  float gloss = 0.05;
+#else
+  vec3 albedo = outside_color(v_rest);
   float gloss = u_gloss;
-  if (u_view == 1) {
-    float t = clamp(abs(v_stress), 0.0, 1.0);
-    albedo = v_stress >= 0.0 ? mix(vec3(0.8), vec3(0.85, 0.03, 0.02), t) : mix(vec3(0.8), vec3(0.05, 0.7, 0.08), t);
-    gloss = 0.1;
-  } else if (v_crack > 0.5) {
-    albedo = inside_color(v_rest);
-    gloss = 0.05;
-  } else {
-    albedo = outside_color(v_rest);
-  }
+#endif
   vec3 v = normalize(u_eye - v_world);
   float ndl = max(dot(n, u_light_dir), 0.0);
   float sh = shadow_factor(n);
@@ -339,12 +337,17 @@ struct FlatVertex {
 struct GpuMesh {
   GLuint vao = 0, vbo = 0, stress_vbo = 0;
   GLsizei count = 0;
+  GLsizei crack_begin = 0;  // corners of the outer faces first, then those of the crack faces
   std::uint64_t geometry_hash = 0, stress_hash = 1;
   bool used = false;
 };
 
+// The parts of the main fragment shader (kMainFs's PART).
+enum MainPart : std::uint8_t { kOuterFaces = 0, kCrackFaces = 1, kStressView = 2 };
+
 struct Renderer::Impl {
-  GLuint main = 0, shadow = 0, flat = 0, ground = 0;
+  std::array<GLuint, 3> main{};  // by MainPart
+  GLuint shadow = 0, flat = 0, ground = 0;
   GLuint shadow_fbo = 0, shadow_tex = 0;
   int shadow_size = 1024;
   GLuint ground_vao = 0, ground_vbo = 0, ground_stress = 0;
@@ -353,7 +356,7 @@ struct Renderer::Impl {
 
   ~Impl() {
     for (auto& [model, m] : meshes) release(m);
-    glDeleteProgram(main);
+    for (const GLuint p : main) glDeleteProgram(p);
     glDeleteProgram(shadow);
     glDeleteProgram(flat);
     glDeleteProgram(ground);
@@ -373,8 +376,9 @@ struct Renderer::Impl {
   }
 
   // Corners with normals smoothed over neighbouring faces of the same kind that bend less than
-  // ~35 degrees: a round vase looks round, crack faces and sharp edges stay sharp.
-  static std::vector<float> corners(const BodyModel& model) {
+  // ~35 degrees: a round vase looks round, crack faces and sharp edges stay sharp. The outer faces
+  // come first; crack_begin is the first corner of the crack faces.
+  static std::vector<float> corners(const BodyModel& model, GLsizei& crack_begin) {
     const TriSurface& s = model.surface;
     const std::size_t nt = s.triangles.size(), nv = s.positions.size();
     std::vector<Vec3> face_n(nt);  // area-weighted
@@ -393,7 +397,14 @@ struct Renderer::Impl {
     const double cos_limit = std::cos(35.0 * 3.14159265358979 / 180.0);
     std::vector<float> out;
     out.reserve(nt * 3 * 10);
-    for (std::size_t t = 0; t < nt; ++t) {
+    std::vector<std::size_t> order;  // outer faces, then crack faces, each in surface order
+    order.reserve(nt);
+    for (std::size_t t = 0; t < nt; ++t)
+      if (crack(t) == 0) order.push_back(t);
+    crack_begin = static_cast<GLsizei>(3 * order.size());
+    for (std::size_t t = 0; t < nt; ++t)
+      if (crack(t) != 0) order.push_back(t);
+    for (const std::size_t t : order) {
       const Vec3 nt_unit = face_n[t].normalized();
       for (Index v : s.triangles[t]) {
         Vec3 n = Vec3::Zero();
@@ -419,7 +430,7 @@ struct Renderer::Impl {
     const std::uint64_t gh = surface_hash(*b.model);
     if (m.vao == 0 || m.geometry_hash != gh) {
       release(m);
-      const std::vector<float> data = corners(*b.model);
+      const std::vector<float> data = corners(*b.model, m.crack_begin);
       glGenVertexArrays(1, &m.vao);
       glGenBuffers(1, &m.vbo);
       glGenBuffers(1, &m.stress_vbo);
@@ -450,9 +461,12 @@ struct Renderer::Impl {
       const TriSurface& s = b.model->surface;
       std::vector<float> stress(static_cast<std::size_t>(m.count), 0.0F);
       if (b.stress.size() == static_cast<std::size_t>(b.model->mesh.num_tets()))
-        for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+        for (std::size_t t = 0, outer = 0, cracked = 0; t < s.triangles.size(); ++t) {
+          // The corners' order of corners(): outer faces, then crack faces.
+          const bool crack = t < b.model->crack_face.size() && b.model->crack_face[t] != 0;
+          const std::size_t at = crack ? static_cast<std::size_t>(m.crack_begin) / 3 + cracked++ : outer++;
           const auto v = static_cast<float>(b.stress[static_cast<std::size_t>(s.triangle_tet[t])]);
-          stress[3 * t] = stress[3 * t + 1] = stress[3 * t + 2] = v;
+          stress[3 * at] = stress[3 * at + 1] = stress[3 * at + 2] = v;
         }
       glBindBuffer(GL_ARRAY_BUFFER, m.stress_vbo);
       glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(stress.size() * sizeof(float)), stress.data());
@@ -486,8 +500,11 @@ Result<std::unique_ptr<Renderer>> Renderer::create() {
   Impl& im = *r->impl_;
   const auto* name = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
   r->device_ = name ? name : "unknown";
-  SHATTER_TRY(main, link(kMainVs, kMainFs, "main"));
-  im.main = *main;
+  for (const MainPart part : {kOuterFaces, kCrackFaces, kStressView}) {
+    const std::string fs = "#version 330 core\n#define PART " + std::to_string(static_cast<int>(part)) + "\n" + kMainFs;
+    SHATTER_TRY(main, link(kMainVs, fs.c_str(), "main"));
+    im.main[part] = *main;
+  }
   SHATTER_TRY(shadow, link(kShadowVs, kShadowFs, "shadow"));
   im.shadow = *shadow;
   SHATTER_TRY(flat, link(kFlatVs, kFlatFs, "flat"));
@@ -624,17 +641,28 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
   glEnable(GL_CULL_FACE);
   glCullFace(GL_BACK);
   glFrontFace(GL_CCW);
-  glUseProgram(im.main);
-  set_mat(im.main, "u_view_proj", view_proj);
-  set_mat(im.main, "u_light_vp", light_vp);
-  set_vec(im.main, "u_eye", camera.eye());
-  set_vec(im.main, "u_light_dir", light);
-  set_int(im.main, "u_use_shadow", shadows ? 1 : 0);
-  set_int(im.main, "u_view", options.view == ViewMode::stress ? 1 : 0);
-  set_float(im.main, "u_stress_inv_scale", 1.0 / scale);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, im.shadow_tex);
-  set_int(im.main, "u_shadow", 0);
+  auto use_main = [&](MainPart part) {
+    const GLuint p = im.main[part];
+    glUseProgram(p);
+    set_mat(p, "u_view_proj", view_proj);
+    set_mat(p, "u_light_vp", light_vp);
+    set_vec(p, "u_eye", camera.eye());
+    set_vec(p, "u_light_dir", light);
+    set_int(p, "u_use_shadow", shadows ? 1 : 0);
+    set_float(p, "u_stress_inv_scale", 1.0 / scale);
+    set_int(p, "u_shadow", 0);
+    return p;
+  };
+  auto set_body = [&](GLuint p, const DrawBody& b) {
+    set_mat(p, "u_model", body_matrix(b));
+    set_vec(p, "u_outside", b.look.outside);
+    set_vec(p, "u_inside", b.look.inside);
+    set_float(p, "u_gloss", b.look.gloss);
+    set_grain(p, b.look.grain);
+    set_float(p, "u_highlight", b.highlight ? 1.0 : 0.0);
+  };
 
   // Nearest first: what they hide fails the depth test before it is shaded.
   std::vector<std::size_t> order(frame.bodies.size());
@@ -645,18 +673,25 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
     const double dy = (frame.bodies[y].position - eye).squaredNorm();
     return dx != dy ? dx < dy : x < y;
   });
-  for (const std::size_t i : order) {
-    const DrawBody& b = frame.bodies[i];
-    set_mat(im.main, "u_model", body_matrix(b));
-    set_vec(im.main, "u_outside", b.look.outside);
-    set_vec(im.main, "u_inside", b.look.inside);
-    set_float(im.main, "u_gloss", b.look.gloss);
-    set_grain(im.main, b.look.grain);
-    set_float(im.main, "u_highlight", b.highlight ? 1.0 : 0.0);
-    glBindVertexArray(meshes[i]->vao);
-    glDrawArrays(GL_TRIANGLES, 0, meshes[i]->count);
+  // The stress view in one pass; the material view in two, each with its own shader: every body's
+  // outer faces, then every body's crack faces.
+  const bool stress_view = options.view == ViewMode::stress;
+  for (const MainPart part : {kOuterFaces, kCrackFaces}) {
+    const GLuint p = use_main(stress_view ? kStressView : part);
+    for (const std::size_t i : order) {
+      const GpuMesh& m = *meshes[i];
+      const GLsizei first = stress_view || part == kOuterFaces ? 0 : m.crack_begin;
+      const GLsizei end = stress_view || part == kCrackFaces ? m.count : m.crack_begin;
+      if (end <= first) continue;
+      set_body(p, frame.bodies[i]);
+      glBindVertexArray(m.vao);
+      glDrawArrays(GL_TRIANGLES, first, end - first);
+    }
+    if (stress_view) break;
+  }
+  for (const GpuMesh* m : meshes) {
     ++stats.bodies;
-    stats.triangles += meshes[i]->count / 3;
+    stats.triangles += m->count / 3;
   }
   glDisable(GL_CULL_FACE);
   // The ground after the bodies: its fragments behind them fail the depth test before shading.
