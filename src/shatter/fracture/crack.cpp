@@ -1,6 +1,7 @@
 #include "shatter/fracture/crack.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -56,21 +57,50 @@ double crack_radius(double stress, double strength, double brittleness, double r
   return std::max(r_min, r0 * std::min(1.0, brittleness * excess));
 }
 
-std::vector<Index> crack_region(const TetMesh& mesh, const NodeTets& incidence, Index origin_tet, const Vec3& center,
-                                double radius) {
+namespace {
+
+// The face neighbours of a mesh's tets as they are asked for (face_neighbor), each found once:
+// several crack regions of one mesh overlap.
+class FaceNeighbors {
+ public:
+  FaceNeighbors(const TetMesh& mesh, const NodeTets& incidence)
+      : mesh_(mesh), incidence_(incidence), known_(mesh.tets.size(), {kUnknown, kUnknown, kUnknown, kUnknown}) {}
+  Index operator()(Index e, int k) {
+    Index& n = known_[static_cast<std::size_t>(e)][static_cast<std::size_t>(k)];
+    if (n == kUnknown) n = face_neighbor(mesh_, incidence_, e, k);
+    return n;
+  }
+
+ private:
+  static constexpr Index kUnknown = -2;  // face_neighbor gives a tet or -1
+  const TetMesh& mesh_;
+  const NodeTets& incidence_;
+  std::vector<std::array<Index, 4>> known_;
+};
+
+std::vector<Index> grow_region(const TetMesh& mesh, FaceNeighbors& neighbors, Index origin_tet, const Vec3& center,
+                               double radius) {
   std::vector<char> seen(mesh.tets.size(), 0);
   std::vector<Index> out{origin_tet};
   seen[origin_tet] = 1;
   const double r2 = radius * radius;
   for (std::size_t i = 0; i < out.size(); ++i)
     for (int k = 0; k < 4; ++k) {
-      const Index n = face_neighbor(mesh, incidence, out[i], k);
+      const Index n = neighbors(out[i], k);
       if (n < 0 || seen[n]) continue;
       seen[n] = 1;
       if ((centroid(mesh, n) - center).squaredNorm() <= r2) out.push_back(n);
     }
   std::sort(out.begin(), out.end());
   return out;
+}
+
+}  // namespace
+
+std::vector<Index> crack_region(const TetMesh& mesh, const NodeTets& incidence, Index origin_tet, const Vec3& center,
+                                double radius) {
+  FaceNeighbors neighbors(mesh, incidence);
+  return grow_region(mesh, neighbors, origin_tet, center, radius);
 }
 
 std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStress>& stress, const Material& material,
@@ -110,6 +140,7 @@ std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStr
   if (over.empty() && ductile_origins.empty()) return plans;
 
   const NodeTets incidence = node_tets(mesh);
+  FaceNeighbors neighbors(mesh, incidence);  // shared by the plans' regions
   std::vector<char> taken(mesh.tets.size(), 0);
   auto consider = [&](Index e, bool ductile) {
     if (static_cast<int>(plans.size()) >= options.max_cracks || (taken[e] && !options.branch)) return;
@@ -127,7 +158,7 @@ std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStr
     p.stress = tension(e);
     p.radius = r;
     p.ductile = ductile;
-    p.tets = crack_region(mesh, incidence, e, c, r);
+    p.tets = grow_region(mesh, neighbors, e, c, r);
     for (Index t : p.tets) taken[t] = 1;
     plans.push_back(std::move(p));
   };
