@@ -62,7 +62,8 @@ struct ImpactSettings {
   double min_approach_speed = 1.0;
   ImpactHold hold = ImpactHold::anchor_far;
   /// r_coll = collision_radius x the body's radius (largest distance of a node from the centre
-  /// of mass). When no tet lies beyond it, the farthest fifth of the body is held instead.
+  /// of mass). When no tet lies beyond it, the tets beyond 80 % of the farthest centroid distance
+  /// from the loads are held instead.
   double collision_radius = 0.5;
   /// Hertz's radius of curvature R = curvature_radius x the body's radius: by default the body
   /// meets the obstacle as a sphere of its own size would. (A smaller R means a softer, longer
