@@ -9,6 +9,7 @@
 #include <numeric>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "shatter/core/hash.h"
@@ -21,7 +22,7 @@ constexpr const char* kMainVs = R"(#version 330 core
 layout(location = 0) in vec3 a_pos;     // body frame, m
 layout(location = 1) in vec3 a_normal;  // body frame
 layout(location = 2) in vec3 a_rest;    // rest coordinates for solid textures, m
-layout(location = 4) in float a_stress; // display stress of the face's tet, Pa
+layout(location = 3) in float a_stress; // display stress of the face's tet, Pa
 uniform mat4 u_model;
 uniform mat4 u_view_proj;
 uniform mat4 u_light_vp;
@@ -332,12 +333,14 @@ struct FlatVertex {
 
 }  // namespace
 
-// A model's surface on the GPU: per-corner position, normal, rest coordinate and crack flag (one
-// buffer, made once), and the display stress of each corner's tet (refilled when it changes).
+// A model's surface on the GPU: per-corner position, normal and rest coordinate (one buffer, made
+// once), and the display stress of each corner's tet (refilled when it changes). The outer faces
+// come first, then the crack faces, each drawn by its own shader.
 struct GpuMesh {
   GLuint vao = 0, vbo = 0, stress_vbo = 0;
-  GLsizei count = 0;
-  GLsizei crack_begin = 0;  // corners of the outer faces first, then those of the crack faces
+  GLsizei count = 0;             // corners
+  GLsizei crack_begin = 0;       // first corner of the crack faces
+  std::vector<Index> triangles;  // the surface triangle of each drawn triangle
   std::uint64_t geometry_hash = 0, stress_hash = 1;
   bool used = false;
 };
@@ -376,9 +379,9 @@ struct Renderer::Impl {
   }
 
   // Corners with normals smoothed over neighbouring faces of the same kind that bend less than
-  // ~35 degrees: a round vase looks round, crack faces and sharp edges stay sharp. The outer faces
-  // come first; crack_begin is the first corner of the crack faces.
-  static std::vector<float> corners(const BodyModel& model, GLsizei& crack_begin) {
+  // ~35 degrees: a round vase looks round, crack faces and sharp edges stay sharp. In the order of
+  // m.triangles (outer faces, then crack faces), which this sets with m.crack_begin.
+  static std::vector<float> corners(const BodyModel& model, GpuMesh& m) {
     const TriSurface& s = model.surface;
     const std::size_t nt = s.triangles.size(), nv = s.positions.size();
     std::vector<Vec3> face_n(nt);  // area-weighted
@@ -396,15 +399,15 @@ struct Renderer::Impl {
     auto crack = [&](std::size_t t) { return t < model.crack_face.size() ? model.crack_face[t] : std::uint8_t{0}; };
     const double cos_limit = std::cos(35.0 * 3.14159265358979 / 180.0);
     std::vector<float> out;
-    out.reserve(nt * 3 * 10);
-    std::vector<std::size_t> order;  // outer faces, then crack faces, each in surface order
-    order.reserve(nt);
+    out.reserve(nt * 3 * 9);
+    m.triangles.clear();  // outer faces, then crack faces, each in surface order
     for (std::size_t t = 0; t < nt; ++t)
-      if (crack(t) == 0) order.push_back(t);
-    crack_begin = static_cast<GLsizei>(3 * order.size());
+      if (crack(t) == 0) m.triangles.push_back(static_cast<Index>(t));
+    m.crack_begin = static_cast<GLsizei>(3 * m.triangles.size());
     for (std::size_t t = 0; t < nt; ++t)
-      if (crack(t) != 0) order.push_back(t);
-    for (const std::size_t t : order) {
+      if (crack(t) != 0) m.triangles.push_back(static_cast<Index>(t));
+    for (const Index ti : m.triangles) {
+      const auto t = static_cast<std::size_t>(ti);
       const Vec3 nt_unit = face_n[t].normalized();
       for (Index v : s.triangles[t]) {
         Vec3 n = Vec3::Zero();
@@ -418,8 +421,7 @@ struct Renderer::Impl {
         const Vec3 r = model.material_origin + p;
         out.insert(out.end(), {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()),
                                static_cast<float>(n.x()), static_cast<float>(n.y()), static_cast<float>(n.z()),
-                               static_cast<float>(r.x()), static_cast<float>(r.y()), static_cast<float>(r.z()),
-                               static_cast<float>(crack(t))});
+                               static_cast<float>(r.x()), static_cast<float>(r.y()), static_cast<float>(r.z())});
       }
     }
     return out;
@@ -430,28 +432,26 @@ struct Renderer::Impl {
     const std::uint64_t gh = surface_hash(*b.model);
     if (m.vao == 0 || m.geometry_hash != gh) {
       release(m);
-      const std::vector<float> data = corners(*b.model, m.crack_begin);
+      const std::vector<float> data = corners(*b.model, m);
       glGenVertexArrays(1, &m.vao);
       glGenBuffers(1, &m.vbo);
       glGenBuffers(1, &m.stress_vbo);
       glBindVertexArray(m.vao);
       glBindBuffer(GL_ARRAY_BUFFER, m.vbo);
       glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(data.size() * sizeof(float)), data.data(), GL_STATIC_DRAW);
-      const GLsizei stride = 10 * sizeof(float);
+      const GLsizei stride = 9 * sizeof(float);
       glEnableVertexAttribArray(0);
       glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, nullptr);
       glEnableVertexAttribArray(1);
       glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, stride, buffer_offset(3 * sizeof(float)));
       glEnableVertexAttribArray(2);
       glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, stride, buffer_offset(6 * sizeof(float)));
-      glEnableVertexAttribArray(3);
-      glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, stride, buffer_offset(9 * sizeof(float)));
-      m.count = static_cast<GLsizei>(data.size() / 10);
+      m.count = static_cast<GLsizei>(data.size() / 9);
       glBindBuffer(GL_ARRAY_BUFFER, m.stress_vbo);
       glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(static_cast<std::size_t>(m.count) * sizeof(float)), nullptr,
                    GL_DYNAMIC_DRAW);
-      glEnableVertexAttribArray(4);
-      glVertexAttribPointer(4, 1, GL_FLOAT, GL_FALSE, sizeof(float), nullptr);
+      glEnableVertexAttribArray(3);
+      glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, sizeof(float), nullptr);
       glBindVertexArray(0);
       m.geometry_hash = gh;
       m.stress_hash = ~std::uint64_t{0};
@@ -461,12 +461,10 @@ struct Renderer::Impl {
       const TriSurface& s = b.model->surface;
       std::vector<float> stress(static_cast<std::size_t>(m.count), 0.0F);
       if (b.stress.size() == static_cast<std::size_t>(b.model->mesh.num_tets()))
-        for (std::size_t t = 0, outer = 0, cracked = 0; t < s.triangles.size(); ++t) {
-          // The corners' order of corners(): outer faces, then crack faces.
-          const bool crack = t < b.model->crack_face.size() && b.model->crack_face[t] != 0;
-          const std::size_t at = crack ? static_cast<std::size_t>(m.crack_begin) / 3 + cracked++ : outer++;
-          const auto v = static_cast<float>(b.stress[static_cast<std::size_t>(s.triangle_tet[t])]);
-          stress[3 * at] = stress[3 * at + 1] = stress[3 * at + 2] = v;
+        for (std::size_t j = 0; j < m.triangles.size(); ++j) {
+          const Index tet = s.triangle_tet[static_cast<std::size_t>(m.triangles[j])];
+          const auto v = static_cast<float>(b.stress[static_cast<std::size_t>(tet)]);
+          stress[3 * j] = stress[3 * j + 1] = stress[3 * j + 2] = v;
         }
       glBindBuffer(GL_ARRAY_BUFFER, m.stress_vbo);
       glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(stress.size() * sizeof(float)), stress.data());
@@ -532,24 +530,23 @@ Result<std::unique_ptr<Renderer>> Renderer::create() {
   if (status != GL_FRAMEBUFFER_COMPLETE) return make_error("renderer: the shadow map framebuffer is incomplete");
 
   // The ground: one quad, placed and scaled by its model matrix (unit square in x-z).
-  const float quad[] = {-1, 0, -1, 0, 1, 0, 0, 0, 0, 0, 1, 0, -1, 0, 1, 0, 0, 0, 0, 0, 1,  0, 1, 0, 1, 0, 0, 0, 0, 0,
-                        -1, 0, -1, 0, 1, 0, 0, 0, 0, 0, 1, 0, 1,  0, 1, 0, 0, 0, 0, 0, -1, 0, 1, 0, 1, 0, 0, 0, 0, 0};
+  const float quad[] = {-1, 0, -1, 0, 1, 0, 0, 0, 0, 1, 0, -1, 0, 1, 0, 0, 0, 0, 1,  0, 1, 0, 1, 0, 0, 0, 0,
+                        -1, 0, -1, 0, 1, 0, 0, 0, 0, 1, 0, 1,  0, 1, 0, 0, 0, 0, -1, 0, 1, 0, 1, 0, 0, 0, 0};
   glGenVertexArrays(1, &im.ground_vao);
   glGenBuffers(1, &im.ground_vbo);
   glGenBuffers(1, &im.ground_stress);
   glBindVertexArray(im.ground_vao);
   glBindBuffer(GL_ARRAY_BUFFER, im.ground_vbo);
   glBufferData(GL_ARRAY_BUFFER, sizeof quad, quad, GL_STATIC_DRAW);
-  for (GLuint a = 0; a < 4; ++a) glEnableVertexAttribArray(a);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 10 * sizeof(float), nullptr);
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 10 * sizeof(float), buffer_offset(3 * sizeof(float)));
-  glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, 10 * sizeof(float), buffer_offset(6 * sizeof(float)));
-  glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, 10 * sizeof(float), buffer_offset(9 * sizeof(float)));
+  for (GLuint a = 0; a < 3; ++a) glEnableVertexAttribArray(a);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 9 * sizeof(float), nullptr);
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 9 * sizeof(float), buffer_offset(3 * sizeof(float)));
+  glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, 9 * sizeof(float), buffer_offset(6 * sizeof(float)));
   const float zeros[6] = {0, 0, 0, 0, 0, 0};
   glBindBuffer(GL_ARRAY_BUFFER, im.ground_stress);
   glBufferData(GL_ARRAY_BUFFER, sizeof zeros, zeros, GL_STATIC_DRAW);
-  glEnableVertexAttribArray(4);
-  glVertexAttribPointer(4, 1, GL_FLOAT, GL_FALSE, sizeof(float), nullptr);
+  glEnableVertexAttribArray(3);
+  glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, sizeof(float), nullptr);
 
   glGenVertexArrays(1, &im.flat_vao);
   glGenBuffers(1, &im.flat_vbo);
@@ -675,19 +672,22 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
   });
   // The stress view in one pass; the material view in two, each with its own shader: every body's
   // outer faces, then every body's crack faces.
-  const bool stress_view = options.view == ViewMode::stress;
-  for (const MainPart part : {kOuterFaces, kCrackFaces}) {
-    const GLuint p = use_main(stress_view ? kStressView : part);
+  auto draw_corners = [&](MainPart part, auto range) {
+    const GLuint p = use_main(part);
     for (const std::size_t i : order) {
       const GpuMesh& m = *meshes[i];
-      const GLsizei first = stress_view || part == kOuterFaces ? 0 : m.crack_begin;
-      const GLsizei end = stress_view || part == kCrackFaces ? m.count : m.crack_begin;
+      const auto [first, end] = range(m);
       if (end <= first) continue;
       set_body(p, frame.bodies[i]);
       glBindVertexArray(m.vao);
       glDrawArrays(GL_TRIANGLES, first, end - first);
     }
-    if (stress_view) break;
+  };
+  if (options.view == ViewMode::stress) {
+    draw_corners(kStressView, [](const GpuMesh& m) { return std::pair<GLsizei, GLsizei>(0, m.count); });
+  } else {
+    draw_corners(kOuterFaces, [](const GpuMesh& m) { return std::pair<GLsizei, GLsizei>(0, m.crack_begin); });
+    draw_corners(kCrackFaces, [](const GpuMesh& m) { return std::pair(m.crack_begin, m.count); });
   }
   for (const GpuMesh* m : meshes) {
     ++stats.bodies;
