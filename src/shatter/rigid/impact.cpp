@@ -9,6 +9,7 @@
 #include <map>
 #include <numbers>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -67,8 +68,9 @@ SurfaceAreas surface_areas(const TriSurface& s) {
 }
 
 // Nodes held for the paper's mode: every node of every tet whose centroid is farther than r from
-// all loads; when none is, the tets beyond 80 % of the farthest centroid distance.
-std::vector<AnchorMask> hold_far(const TetMesh& mesh, const std::vector<LocalLoad>& loads, double r) {
+// all loads; when none is, the tets beyond 80 % of the farthest centroid distance. Nothing when
+// that far field is less than a twentieth of the tets (see respond).
+std::optional<std::vector<AnchorMask>> hold_far(const TetMesh& mesh, const std::vector<LocalLoad>& loads, double r) {
   const Index nt = mesh.num_tets();
   std::vector<double> distance(static_cast<std::size_t>(nt));
   double farthest = 0;
@@ -82,20 +84,14 @@ std::vector<AnchorMask> hold_far(const TetMesh& mesh, const std::vector<LocalLoa
   }
   const double limit = farthest > r ? r : 0.8 * farthest;
   std::vector<AnchorMask> anchors(mesh.positions.size(), anchor_none);
-  for (Index e = 0; e < nt; ++e)
-    if (distance[e] > limit || distance[e] == farthest)
-      for (const Index v : mesh.tets[e]) anchors[v] = anchor_all;
-  return anchors;
-}
-
-// Whether the far field of hold_far is a hold: at least a twentieth of the tets have all four
-// corners held.
-bool holds_enough(const TetMesh& mesh, const std::vector<AnchorMask>& anchors) {
   Index held = 0;
-  for (const TetIndices& t : mesh.tets)
-    held += anchors[t[0]] != anchor_none && anchors[t[1]] != anchor_none && anchors[t[2]] != anchor_none &&
-            anchors[t[3]] != anchor_none;
-  return 20 * held >= mesh.num_tets();
+  for (Index e = 0; e < nt; ++e)
+    if (distance[e] > limit || distance[e] == farthest) {
+      ++held;
+      for (const Index v : mesh.tets[e]) anchors[v] = anchor_all;
+    }
+  if (20 * held < nt) return std::nullopt;
+  return anchors;
 }
 
 // Inertia relief: body forces that balance the load's force and moment about the centre of the
@@ -330,19 +326,16 @@ Result<void> respond(const BodyModel& model, BodyState& state, const std::vector
   for (const LocalLoad& l : loads) total_weight += l.impulse;
   // Hold the body and solve its static response.
   StaticProblem problem;
-  bool relief = settings.hold == ImpactHold::inertia_relief;
-  if (!relief) {
+  // Contacts along most of a long piece (landing flat) leave only its end beyond r_coll: that end
+  // would clamp the piece rather than stand in for its inertia, and the piece would swing about it
+  // under the load. Such a piece is held by inertia relief instead.
+  std::optional<std::vector<AnchorMask>> far;
+  if (settings.hold == ImpactHold::anchor_far)
+    far = hold_far(model.mesh, loads, settings.collision_radius * body_radius);
+  if (far) {
     result.collision_radius = settings.collision_radius * body_radius;
-    problem.anchors = hold_far(model.mesh, loads, result.collision_radius);
-    // Contacts along most of a long piece (landing flat) leave only its end beyond r_coll: that
-    // end would clamp the piece rather than stand in for its inertia, and the piece would swing
-    // about it under the load. Such a piece is held by inertia relief instead.
-    if (!holds_enough(model.mesh, problem.anchors)) {
-      relief = true;
-      result.collision_radius = 0;
-    }
-  }
-  if (relief) {
+    problem.anchors = std::move(*far);
+  } else {
     Vec3 local_load_point = Vec3::Zero();
     for (const LocalLoad& l : loads) local_load_point += (l.impulse / total_weight) * l.point;
     problem.anchors = hold_inertia_relief(model.mesh, model.fem, local_load_point, forces);
