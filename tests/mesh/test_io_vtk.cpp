@@ -100,6 +100,28 @@ TEST(VtkRead, Version51AsciiMixedCells) {
   EXPECT_EQ(r->skipped, (std::vector<std::string>{"1 triangle (vtk type 5)", "1 node used by no tetrahedron"}));
 }
 
+TEST(VtkRead, DataCountsMustMatchPointsAndCells) {
+  // A POINT_DATA / CELL_DATA count that disagrees with POINTS / CELLS: its arrays are consistent
+  // among themselves, but cannot be ids or tags of the mesh.
+  const std::string head =
+      "# vtk DataFile Version 4.2\nd\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+      "POINTS 6 float\n0 0 0 1 0 0 0 1 0\n0 0 1 1 1 1 9 9 9\n"
+      "CELLS 2 9\n4 0 1 2 3\n3 0 1 5\nCELL_TYPES 2\n10\n5\n";
+  const Result<MeshReadResult> nodes =
+      parse_vtk(head + "POINT_DATA 2\nSCALARS node_tag int 1\nLOOKUP_TABLE default\n1 2\n", "d.vtk");
+  ASSERT_FALSE(nodes.ok());
+  EXPECT_NE(nodes.error().message.find("node_tag has 2 values for 6 points"), std::string::npos)
+      << nodes.error().message;
+  const Result<MeshReadResult> cells =
+      parse_vtk(head + "CELL_DATA 1\nSCALARS tet_id int 1\nLOOKUP_TABLE default\n4\n", "d.vtk");
+  ASSERT_FALSE(cells.ok());
+  EXPECT_NE(cells.error().message.find("tet_id has 1 value for 2 cells"), std::string::npos) << cells.error().message;
+  const Result<MeshReadResult> good =
+      parse_vtk(head + "POINT_DATA 6\nSCALARS node_tag int 1\nLOOKUP_TABLE default\n1 2 3 4 5 6\n", "d.vtk");
+  ASSERT_TRUE(good.ok()) << good.error().to_string();
+  EXPECT_EQ(good->mesh.node_tags, (std::vector<std::int32_t>{1, 2, 3, 4}));  // points 4 and 5 are in no tet
+}
+
 /// Big-endian binary 4.2 written byte by byte; `bad_index` corrupts one connectivity entry.
 std::string binary42(std::int32_t bad_index = 3, double x0 = 0.0) {
   std::string s = "# vtk DataFile Version 4.2\nb\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n";

@@ -467,6 +467,22 @@ class VtkReader {
       tet_cells.push_back(i);
     }
     if (m.tets.empty()) return c_.error("no tetrahedra (cell type 10) in the file");
+    // A POINT_DATA / CELL_DATA count is checked against its arrays while reading, against the
+    // points and cells only here.
+    const struct {
+      const std::vector<std::int64_t>& values;
+      std::size_t want;
+      const char* name;
+      const char* of;
+    } restored[] = {{node_id_, static_cast<std::size_t>(np), "node_id", "points"},
+                    {node_tag_, static_cast<std::size_t>(np), "node_tag", "points"},
+                    {tet_id_, ncells, "tet_id", "cells"},
+                    {tet_tag_, ncells, "tet tag", "cells"}};
+    for (const auto& a : restored)
+      if (!a.values.empty() && a.values.size() != a.want)
+        return c_.error(std::string("array ") + a.name + " has " +
+                        io::count_phrase(static_cast<std::int64_t>(a.values.size()), "value", "values") + " for " +
+                        std::to_string(a.want) + " " + a.of);
     if (!node_id_.empty()) m.node_ids = std::move(node_id_);
     if (!node_tag_.empty()) m.node_tags.assign(node_tag_.begin(), node_tag_.end());
     if (!tet_id_.empty())
