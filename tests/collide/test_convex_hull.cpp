@@ -175,6 +175,41 @@ TEST(ConvexHull, RandomCloudsMatchBruteForce) {
   }
 }
 
+TEST(ConvexHull, TranslatedHullIsTheHullOfTheMovedPoints) {
+  // A fragment keeps the hull of a piece the cut left whole, moved into its own frame: it must be
+  // the hull of the moved points (the same vertices bitwise, every point behind every face, the
+  // same volume, centroid and bounds), on boxes with coplanar points and on random clouds.
+  Random rng(77);
+  for (int trial = 0; trial < 30; ++trial) {
+    std::vector<Vec3> points;
+    if (trial % 3 == 0) {
+      const TetMesh box = make_box_mesh({.max = Vec3(0.3, 0.1, 0.2), .cells = {3, 2, 2}});
+      points = box.positions;
+    } else {
+      points = random_ball(rng, 5 + static_cast<int>(rng.below(60)), 0.2);
+    }
+    const Vec3 shift = rng.uniform_vec3(-3, 3);
+    auto hull = build_convex_hull(points);
+    ASSERT_TRUE(hull.ok()) << hull.error().to_string();
+    std::vector<Vec3> moved_points = points;
+    for (Vec3& p : moved_points) p += shift;
+    auto rebuilt = build_convex_hull(moved_points);
+    ASSERT_TRUE(rebuilt.ok());
+    const ConvexHull moved = translated_hull(*hull, shift);
+    ASSERT_EQ(check_convex_hull(moved, moved.tolerance), "") << "trial " << trial;
+    ASSERT_EQ(moved.vertices.size(), hull->vertices.size());
+    for (std::size_t i = 0; i < moved.vertices.size(); ++i)
+      EXPECT_EQ(moved.vertices[i], Vec3(hull->vertices[i] + shift)) << "trial " << trial;
+    EXPECT_LE(max_height_above(moved, moved_points), moved.tolerance) << "trial " << trial;
+    EXPECT_EQ(moved.faces.size(), rebuilt->faces.size()) << "trial " << trial;
+    EXPECT_NEAR(moved.volume, rebuilt->volume, 1e-12 * rebuilt->volume) << "trial " << trial;
+    EXPECT_LT((moved.centroid - rebuilt->centroid).norm(), 1e-12) << "trial " << trial;
+    EXPECT_NEAR(moved.radius, rebuilt->radius, 1e-12) << "trial " << trial;
+    EXPECT_LT((moved.bounds.min - rebuilt->bounds.min).norm() + (moved.bounds.max - rebuilt->bounds.max).norm(), 1e-15)
+        << "trial " << trial;
+  }
+}
+
 TEST(ConvexHull, DegenerateCloudsGiveValidHulls) {
   // Integer grids (many coplanar and cospherical points), random polytopes sampled on their faces
   // with noise near the tolerance, cylinders: always a valid hull holding every point.

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -12,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "shatter/collide/convex_hull.h"
 #include "shatter/core/parallel.h"
 #include "shatter/core/random.h"
 #include "shatter/mesh/generate.h"
@@ -242,6 +244,24 @@ TEST(Impacts, FragmentationsConserveMassAndMomentum) {
     if (w.removed(i)) continue;
     EXPECT_FALSE(validate_mesh(w.model(i)->mesh).has_errors());
     EXPECT_GT(w.rigid_state(i).position.y(), -0.01);
+    // Its convex pieces, built anew or kept from the parent's and moved into the fragment's frame,
+    // are hulls of its own nodes: each vertex is a node (bitwise), each node is inside a piece.
+    const std::vector<Vec3>& nodes = w.model(i)->mesh.positions;
+    std::set<std::array<double, 3>> node_set;
+    for (const Vec3& x : nodes) node_set.insert({x.x(), x.y(), x.z()});
+    for (const ConvexHull& piece : w.pieces(i)) {
+      EXPECT_EQ(check_convex_hull(piece, piece.tolerance), "");
+      for (const Vec3& v : piece.vertices) EXPECT_TRUE(node_set.contains({v.x(), v.y(), v.z()}));
+    }
+    for (const Vec3& x : nodes) {
+      bool inside = false;
+      for (const ConvexHull& piece : w.pieces(i)) {
+        bool in = true;
+        for (const HullFace& f : piece.faces) in = in && f.normal.dot(x) - f.offset <= 2 * piece.tolerance;
+        inside = inside || in;
+      }
+      EXPECT_TRUE(inside);
+    }
   }
 }
 

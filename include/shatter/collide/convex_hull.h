@@ -60,6 +60,12 @@ struct HullOptions {
 /// or line, within the tolerance).
 Result<ConvexHull> build_convex_hull(std::span<const Vec3> points, const HullOptions& options = {});
 
+/// The hull moved by `shift`, m: vertices v + shift (bitwise what the shifted input points are,
+/// as IEEE addition), the same faces and edges, face offsets and the centroid, volume, radius and
+/// bounds of the moved vertices; the tolerance is kept. For a hull whose points were all moved by
+/// the same amount, at a small fraction of the cost of build_convex_hull on the moved points.
+[[nodiscard]] ConvexHull translated_hull(ConvexHull hull, const Vec3& shift);
+
 /// Volume of the hull of `points`, m^3, from the triangle stage of build_convex_hull alone (no
 /// faces merged, no structure kept): for callers that only compare volumes, at about half the
 /// cost. Agrees with build_convex_hull's volume to the faces it merges within the tolerance (at

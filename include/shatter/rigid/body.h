@@ -85,7 +85,8 @@ std::vector<Vec3> world_positions(const BodyModel& model, const RigidState& rigi
 /// boundary surface and the plastic strain; tets, node masses and the mass are kept (mass is
 /// conserved). The centre of mass and inertia follow the new shape at the kept mass, and the body
 /// frame is re-centred on the new centre of mass (rigid.position moves with it so no node jumps),
-/// so every tet's FEM rest data is recomputed.
-void apply_plastic_update(BodyModel& model, BodyState& state, const PlasticResult& plastic);
+/// so every tet's FEM rest data is recomputed. Returns the re-centring, m (in the old body frame):
+/// the new rest positions less it are the new body-frame positions (zero when no node moved).
+Vec3 apply_plastic_update(BodyModel& model, BodyState& state, const PlasticResult& plastic);
 
 }  // namespace shatter

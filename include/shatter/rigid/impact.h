@@ -113,6 +113,10 @@ struct ImpactChild {
   std::vector<double> plastic_strain;    ///< per child tet
   std::vector<double> tensile_strength;  ///< per child tet, Pa (empty when the parent's was)
   std::vector<Index> parent_tet;         ///< the parent's tet each child tet lies in (#tets)
+  /// Origin of the child's body frame in the parent's body frame, m: a node at x in the child's
+  /// frame lay at x + origin in the parent's (x is the parent's position less origin, bitwise, for
+  /// a node that neither the cut nor plasticity moved).
+  Vec3 origin = Vec3::Zero();
 };
 
 /// What analyze_impact found and did.

@@ -451,14 +451,16 @@ class World {
   [[nodiscard]] Result<std::shared_ptr<const Shape>> shared_tet_shape(
       const std::shared_ptr<const BodyModel>& model) const;
   /// Pieces over the given clusters of the model's tets (a dent moves nodes; a fragment keeps its
-  /// parent's clusters, cut to the tets it has).
-  [[nodiscard]] Result<std::shared_ptr<const Shape>> shape_from_clusters(std::vector<std::vector<Index>> clusters,
-                                                                         const BodyModel& model) const;
+  /// parent's clusters, cut to the tets it has). A cluster with a hull in `moved` (empty, or one
+  /// per cluster, null where none) takes that hull moved by `shift` instead of building one.
+  [[nodiscard]] Result<std::shared_ptr<const Shape>> shape_from_clusters(
+      std::vector<std::vector<Index>> clusters, const BodyModel& model,
+      const std::vector<const ConvexHull*>& moved = {}, const Vec3& shift = Vec3::Zero()) const;
   /// A fragment's pieces from its parent's: its tets grouped by the parent piece their parent tet
-  /// lay in.
-  [[nodiscard]] Result<std::shared_ptr<const Shape>> inherit_shape(const Shape& parent,
-                                                                   const std::vector<Index>& parent_tet,
-                                                                   const BodyModel& model) const;
+  /// lay in. A piece the cut left whole (the same tets at the same rest positions, in the child's
+  /// frame) keeps its parent's hull, moved.
+  [[nodiscard]] Result<std::shared_ptr<const Shape>> inherit_shape(const Shape& parent, const BodyModel& parent_model,
+                                                                   const ImpactChild& child) const;
   void process_impacts();
   /// Replace body id by the outcome of its impact analysis; records the events.
   void apply_impact(Index id, Index other, ImpactResult& r);

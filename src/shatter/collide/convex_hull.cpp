@@ -650,6 +650,23 @@ Index ConvexHull::support(const Vec3& d) const {
   return best;
 }
 
+ConvexHull translated_hull(ConvexHull hull, const Vec3& shift) {
+  for (Vec3& v : hull.vertices) v += shift;
+  // A face plane moves by normal . shift; its own vertices are taken too, so that each stays on or
+  // behind its plane after the round-off of both.
+  for (HullFace& face : hull.faces) {
+    double offset = face.offset + face.normal.dot(shift);
+    Index e = face.edge;
+    do {
+      offset = std::max(offset, face.normal.dot(hull.vertices[hull.edges[e].origin]));
+      e = hull.edges[e].next;
+    } while (e != face.edge);
+    face.offset = offset;
+  }
+  finish(hull);
+  return hull;
+}
+
 namespace {
 
 // Checks the input; the tolerance HullOptions asks for, resolved for these points, m.

@@ -63,11 +63,11 @@ std::vector<Vec3> world_positions(const BodyModel& model, const RigidState& rigi
   return x;
 }
 
-void apply_plastic_update(BodyModel& model, BodyState& state, const PlasticResult& plastic) {
+Vec3 apply_plastic_update(BodyModel& model, BodyState& state, const PlasticResult& plastic) {
   SHATTER_CHECK(plastic.rest_positions.size() == model.mesh.positions.size());
   SHATTER_CHECK(plastic.plastic_strain.size() == model.mesh.tets.size());
   state.plastic_strain = plastic.plastic_strain;
-  if (plastic.moved_nodes.empty()) return;
+  if (plastic.moved_nodes.empty()) return Vec3::Zero();
   // The new shape at the kept mass: its density follows the volume change (mass properties are
   // linear in the density).
   const double mass = model.mass.mass;
@@ -86,6 +86,7 @@ void apply_plastic_update(BodyModel& model, BodyState& state, const PlasticResul
   for (Index e = 0; e < model.mesh.num_tets(); ++e) set_tet_rest(model.fem, e, model.mesh.corners(e));
   // Same faces in the same order: the crack flags stay valid.
   model.surface = boundary_surface(model.mesh, model.faces);
+  return dc;
 }
 
 }  // namespace shatter

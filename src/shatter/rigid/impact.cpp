@@ -293,6 +293,7 @@ void make_children(const BodyModel& model, const RigidState& rigid, const Fractu
     m->mass = mass_properties(m->mesh, child_material.density);
     m->material_origin = model.material_origin + c;
     ImpactChild child;
+    child.origin = c;
     child.parent_tet.resize(f.tet_map.size());
     child.plastic_strain.resize(f.tet_map.size());
     for (std::size_t e = 0; e < f.tet_map.size(); ++e) {
@@ -394,7 +395,7 @@ Result<void> respond(const BodyModel& model, BodyState& state, const std::vector
       auto dented = std::make_shared<BodyModel>(model);
       BodyState moved;
       moved.rigid = rigid;
-      apply_plastic_update(*dented, moved, fr.plastic);
+      child.origin = apply_plastic_update(*dented, moved, fr.plastic);
       child.model = std::move(dented);
       child.rigid = moved.rigid;
       child.plastic_strain = fr.plastic.plastic_strain;

@@ -287,11 +287,19 @@ Result<std::shared_ptr<const World::Shape>> World::shared_tet_shape(
 }
 
 Result<std::shared_ptr<const World::Shape>> World::shape_from_clusters(std::vector<std::vector<Index>> clusters,
-                                                                       const BodyModel& model) const {
+                                                                       const BodyModel& model,
+                                                                       const std::vector<const ConvexHull*>& moved,
+                                                                       const Vec3& shift) const {
+  SHATTER_CHECK(moved.empty() || moved.size() == clusters.size());
   auto shape = std::make_shared<Shape>();
   std::vector<Vec3> points;
   std::vector<char> seen(model.mesh.positions.size(), 0);
-  for (const std::vector<Index>& tets : clusters) {
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    if (!moved.empty() && moved[c]) {
+      shape->pieces.push_back(translated_hull(*moved[c], shift));
+      continue;
+    }
+    const std::vector<Index>& tets = clusters[c];
     points.clear();
     for (const Index e : tets)
       for (const Index v : model.mesh.tets[e])
@@ -310,9 +318,10 @@ Result<std::shared_ptr<const World::Shape>> World::shape_from_clusters(std::vect
   return std::shared_ptr<const Shape>(std::move(shape));
 }
 
-Result<std::shared_ptr<const World::Shape>> World::inherit_shape(const Shape& parent,
-                                                                 const std::vector<Index>& parent_tet,
-                                                                 const BodyModel& model) const {
+Result<std::shared_ptr<const World::Shape>> World::inherit_shape(const Shape& parent, const BodyModel& parent_model,
+                                                                 const ImpactChild& child) const {
+  const std::vector<Index>& parent_tet = child.parent_tet;
+  const BodyModel& model = *child.model;
   Index parent_tets = 0;
   for (const auto& tets : parent.piece_tets)
     for (const Index e : tets) parent_tets = std::max(parent_tets, e + 1);
@@ -320,6 +329,7 @@ Result<std::shared_ptr<const World::Shape>> World::inherit_shape(const Shape& pa
   for (std::size_t p = 0; p < parent.piece_tets.size(); ++p)
     for (const Index e : parent.piece_tets[p]) piece_of[e] = static_cast<Index>(p);
   std::vector<Index> slot(parent.piece_tets.size(), -1);
+  std::vector<Index> slot_piece;
   std::vector<std::vector<Index>> clusters;
   for (std::size_t e = 0; e < parent_tet.size(); ++e) {
     const Index pt = parent_tet[e];
@@ -328,10 +338,33 @@ Result<std::shared_ptr<const World::Shape>> World::inherit_shape(const Shape& pa
     if (slot[p] < 0) {
       slot[p] = static_cast<Index>(clusters.size());
       clusters.emplace_back();
+      slot_piece.push_back(p);
     }
     clusters[slot[p]].push_back(static_cast<Index>(e));
   }
-  return shape_from_clusters(std::move(clusters), model);
+  // A cluster is its parent piece moved when it has each of the piece's tets once, each at its
+  // parent's rest positions less the child's origin, bitwise: then its nodes are the piece's nodes
+  // moved, and so is their hull.
+  std::vector<const ConvexHull*> moved(clusters.size(), nullptr);
+  const Vec3 shift = -child.origin;
+  std::vector<char> taken(static_cast<std::size_t>(parent_tets), 0);
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    const Index p = slot_piece[c];
+    if (clusters[c].size() != parent.piece_tets[p].size()) continue;
+    bool same = true;
+    for (const Index e : clusters[c]) {
+      const Index pt = parent_tet[e];
+      same = same && !taken[pt];
+      taken[pt] = 1;
+      for (int k = 0; k < 4 && same; ++k)
+        same = model.mesh.positions[model.mesh.tets[e][k]] ==
+               Vec3(parent_model.mesh.positions[parent_model.mesh.tets[pt][k]] + shift);
+      if (!same) break;
+    }
+    for (const Index e : clusters[c]) taken[parent_tet[e]] = 0;
+    if (same) moved[c] = &parent.pieces[p];
+  }
+  return shape_from_clusters(std::move(clusters), model, moved, shift);
 }
 
 Result<BodyId> World::add_hull(ConvexHull hull, const BodyDef& def) {
@@ -1015,7 +1048,7 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
     Body& body = bodies_[id];
     ImpactChild& child = r.children.front();
     auto shape = r.cracks.empty() ? shape_from_clusters(body.shape->piece_tets, *child.model)
-                                  : inherit_shape(*body.shape, child.parent_tet, *child.model);
+                                  : inherit_shape(*body.shape, *body.model, child);
     if (shape) {
       body.shape = std::move(*shape);
       body.model = child.model;
@@ -1040,7 +1073,7 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
   const Body parent = bodies_[id];
   std::vector<Index> born;
   for (ImpactChild& child : r.children) {
-    auto shape = inherit_shape(*parent.shape, child.parent_tet, *child.model);
+    auto shape = inherit_shape(*parent.shape, *parent.model, child);
     if (!shape) {  // a piece without a collision shape cannot take part: it goes as debris
       log_warning("world: a fragment of body " + std::to_string(id) + " became debris: " + shape.error().message);
       rec.debris_count += 1;
