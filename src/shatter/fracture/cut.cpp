@@ -1,10 +1,12 @@
 #include "shatter/fracture/cut.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numeric>
 #include <span>
+#include <tuple>
 
 #include "shatter/core/assert.h"
 #include "shatter/mesh/topology.h"
@@ -367,6 +369,12 @@ DisconnectResult disconnect_faces(const TetMesh& mesh, const std::vector<std::in
     std::iota(r.node_parent.begin(), r.node_parent.end(), Index(0));
     std::vector<Edge> sources;
     std::vector<Index> parent;  // local union-find over the node's tets
+    struct Through {            // a face through the node: its two other nodes (a < b), tet i, face k
+      Index a, b, i;
+      int k;
+      bool operator<(const Through& o) const { return std::tie(a, b, i, k) < std::tie(o.a, o.b, o.i, o.k); }
+    };
+    std::vector<Through> through;
     for (Index v : cand) {
       const auto ts = nt_of.of(v);
       const Index n = static_cast<Index>(ts.size());
@@ -376,16 +384,30 @@ DisconnectResult disconnect_faces(const TetMesh& mesh, const std::vector<std::in
         while (parent[i] != i) i = parent[i] = parent[parent[i]];
         return i;
       };
+      // Two tets of v share a face through v when they share its other two nodes: sort the faces
+      // through v (three per tet; face k is opposite corner k) by those and pair equal neighbours.
+      through.clear();
       for (Index i = 0; i < n; ++i) {
-        const Index e = ts[i];
+        const TetIndices& t = mesh.tets[ts[i]];
         for (int k = 0; k < 4; ++k) {
-          if (mesh.tets[e][k] == v) continue;  // face k is opposite corner k: the one without v
-          const Index other = face_neighbor(mesh, nt_of, e, k);
-          if (other < e || is_cut(e, k, other)) continue;  // each pair once; skip boundary (-1)
-          const Index j = static_cast<Index>(std::lower_bound(ts.begin(), ts.end(), other) - ts.begin());
-          const Index a = find(i), b = find(j);
-          if (a != b) parent[std::max(a, b)] = std::min(a, b);
+          if (t[k] == v) continue;
+          std::array<Index, 2> others{};
+          int no = 0;
+          for (int c = 0; c < 4; ++c)
+            if (c != k && t[c] != v) others[no++] = t[c];
+          through.push_back({std::min(others[0], others[1]), std::max(others[0], others[1]), i, k});
         }
+      }
+      std::sort(through.begin(), through.end());
+      for (std::size_t f = 0; f + 1 < through.size(); ++f) {
+        const Through& x = through[f];
+        const Through& y = through[f + 1];
+        if (x.a != y.a || x.b != y.b) continue;
+        // Roots are the lowest member of their group whatever the order of unions, so the groups
+        // and the copies below do not depend on it.
+        if (is_cut(ts[x.i], x.k, ts[y.i])) continue;
+        const Index a = find(x.i), b = find(y.i);
+        if (a != b) parent[std::max(a, b)] = std::min(a, b);
       }
       // Group of the lowest tet keeps v; each further group (by lowest tet) gets a new copy.
       std::vector<Index> copy_of_root(n, -1);
