@@ -1,10 +1,12 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "fem_test_util.h"
 #include "shatter/core/parallel.h"
+#include "shatter/core/random.h"
 #include "shatter/fem/fem_model.h"
 #include "shatter/mesh/generate.h"
 #include "support/test_support.h"
@@ -216,6 +218,43 @@ TEST(FemModel, CorotatedFastPathUnderLargeDeformationAndInversion) {
 
 TEST(FemModel, SetTetRest) {
   for (ModelKind kind : {ModelKind::stvk, ModelKind::linear, ModelKind::corotated}) set_tet_rest_check(kind);
+}
+
+// A model that takes the rest data of the tets of another (a fragment from its parent) equals one
+// built from its own mesh to round-off: the same masses, rest data and forces. The source mesh is
+// the target moved and with its tets reversed, so that lanes of the packed data move between
+// groups of four.
+TEST(FemModel, RestDataTakenFromAMovedModel) {
+  Random rng(5);
+  const TetMesh mesh = make_box_mesh({.max = Vec3(0.5, 0.3, 0.2), .cells = {5, 3, 2}, .jitter = 0.2});
+  TetMesh moved = mesh;
+  const Vec3 shift(0.7, -2.5, 11.0);
+  for (Vec3& p : moved.positions) p += shift;
+  std::reverse(moved.tets.begin(), moved.tets.end());
+  const auto nt = static_cast<Index>(mesh.tets.size());
+  for (ModelKind kind : kAllModels) {
+    const FemModel source = make_fem_model(moved, test_material(), kind);
+    std::vector<Index> from(static_cast<std::size_t>(nt));
+    for (Index e = 0; e < nt; ++e) from[e] = e % 3 == 0 ? -1 : nt - 1 - e;  // every third computed
+    const FemModel taken = make_fem_model(mesh, test_material(), kind, {.model = &source, .tet = from});
+    const FemModel built = make_fem_model(mesh, test_material(), kind);
+    for (Index e = 0; e < nt; ++e) {
+      EXPECT_NEAR(taken.rest[e].volume, built.rest[e].volume, 1e-12 * built.rest[e].volume);
+      EXPECT_LT((taken.rest[e].Dm_inv - built.rest[e].Dm_inv).norm(), 1e-10 * built.rest[e].Dm_inv.norm());
+      if (from[e] >= 0) {
+        EXPECT_EQ(taken.rest[e].Dm_inv, source.rest[from[e]].Dm_inv);
+      } else {
+        EXPECT_EQ(taken.rest[e].Dm_inv, built.rest[e].Dm_inv);
+      }
+    }
+    for (std::size_t i = 0; i < built.node_mass.size(); ++i)
+      EXPECT_NEAR(taken.node_mass[i], built.node_mass[i], 1e-12 * built.node_mass[i]);
+    std::vector<Vec3> x = affine(mesh.positions, test::random_deformation(rng, 0.01), Vec3(0.1, 0.2, 0.3));
+    std::vector<Vec3> f_taken, f_built;
+    internal_forces(taken, x, f_taken);
+    internal_forces(built, x, f_built);
+    EXPECT_LT(max_diff(f_taken, f_built), 1e-9 * max_norm(f_built)) << to_string(kind);
+  }
 }
 
 // The global force is the gradient of the total energy (central differences on a few nodes).

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "shatter/core/types.h"
@@ -49,9 +50,19 @@ struct FemModel {
   [[nodiscard]] Index num_tets() const { return static_cast<Index>(tets.size()); }
 };
 
+/// Rest data that make_fem_model may take from another model of the same kind instead of
+/// computing it: `tet[e]` is a tet of `model` whose corners are tet e's corners, in the same order,
+/// all moved by one translation (the rest data does not change under it), or -1. A fragment takes
+/// its parent's this way for the tets the cut left whole.
+struct RestSource {
+  const FemModel* model = nullptr;
+  std::span<const Index> tet;  ///< #tets of the new model, or empty
+};
+
 /// Builds the model from the rest mesh (positively oriented tets). The material is not validated
 /// here (see validate_material).
-FemModel make_fem_model(const TetMesh& rest_mesh, const Material& material, ModelKind kind);
+FemModel make_fem_model(const TetMesh& rest_mesh, const Material& material, ModelKind kind,
+                        const RestSource& from = {});
 
 /// Replace the rest shape of tet e (plasticity: m := x, docs/method.md §2.4): updates rest[e] and the
 /// fast path's data; node masses are kept (mass is conserved). Changing `tets` needs a new model.

@@ -511,7 +511,8 @@ ForceKernelIsa force_kernel_isa() {
   return static_cast<ForceKernelIsa>(chosen - 1);
 }
 
-FemModel make_fem_model(const TetMesh& rest_mesh, const Material& material, ModelKind kind) {
+FemModel make_fem_model(const TetMesh& rest_mesh, const Material& material, ModelKind kind, const RestSource& from) {
+  SHATTER_CHECK(!from.model || (from.model->model == kind && from.tet.size() == rest_mesh.tets.size()));
   FemModel model;
   model.model = kind;
   model.material = material;
@@ -522,12 +523,22 @@ FemModel make_fem_model(const TetMesh& rest_mesh, const Material& material, Mode
   model.rest.resize(n_tets);
   model.node_mass.assign(static_cast<std::size_t>(model.num_nodes), 0.0);
   model.fast.packed.assign(static_cast<std::size_t>(packed_rows(kind)) * ((n_tets + 3) / 4 * 4), 0.0);
+  const int rows = packed_rows(kind);
   for (std::size_t e = 0; e < n_tets; ++e) {
-    const TetRest r = tet_rest(rest_mesh.corners(static_cast<Index>(e)));
-    model.rest[e] = r;
-    const double m = material.density * r.volume / 4.0;  // lumped: rho V / 4 per corner
+    const Index source = from.model ? from.tet[e] : -1;
+    if (source >= 0) {
+      const auto s = static_cast<std::size_t>(source);
+      SHATTER_CHECK(s < from.model->rest.size());
+      model.rest[e] = from.model->rest[s];
+      const double* in = from.model->fast.packed.data() + static_cast<std::size_t>(rows) * (s / 4 * 4) + s % 4;
+      double* out = model.fast.packed.data() + static_cast<std::size_t>(rows) * (e / 4 * 4) + e % 4;
+      for (int row = 0; row < rows; ++row) out[4 * row] = in[4 * row];
+    } else {
+      model.rest[e] = tet_rest(rest_mesh.corners(static_cast<Index>(e)));
+      store_fast_rest(model, e);
+    }
+    const double m = material.density * model.rest[e].volume / 4.0;  // lumped: rho V / 4 per corner
     for (Index n : model.tets[e]) model.node_mass[static_cast<std::size_t>(n)] += m;
-    store_fast_rest(model, e);
   }
   build_blocks(model);
   return model;

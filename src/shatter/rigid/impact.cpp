@@ -280,6 +280,7 @@ void make_children(const BodyModel& model, const RigidState& rigid, const Fractu
   }
   const Mat3 to_world = rigid.orientation.toRotationMatrix();
   const double tolerance = 1e-7 * std::max(body_radius, 1e-3);
+  std::vector<Index> same_rest;
   for (std::size_t k = 0; k < fr.fragments.size(); ++k) {
     if (!keep[k]) continue;
     const Fragment& f = fr.fragments[k];
@@ -289,7 +290,16 @@ void make_children(const BodyModel& model, const RigidState& rigid, const Fractu
     for (Vec3& p : m->mesh.positions) p -= c;
     m->faces = compute_faces(m->mesh);
     m->surface = boundary_surface(m->mesh, m->faces);
-    m->fem = make_fem_model(m->mesh, child_material, model.fem.model);
+    // Tets the cut and plasticity left as they were keep the parent's rest data.
+    same_rest.resize(f.tet_map.size());
+    for (std::size_t e = 0; e < f.tet_map.size(); ++e) {
+      const Index pt = fr.tet_parent[f.tet_map[e]];
+      bool same = true;
+      for (int corner = 0; corner < 4 && same; ++corner)
+        same = f.mesh.positions[f.mesh.tets[e][corner]] == model.mesh.positions[model.mesh.tets[pt][corner]];
+      same_rest[e] = same ? pt : -1;
+    }
+    m->fem = make_fem_model(m->mesh, child_material, model.fem.model, {.model = &model.fem, .tet = same_rest});
     m->mass = mass_properties(m->mesh, child_material.density);
     m->material_origin = model.material_origin + c;
     ImpactChild child;
