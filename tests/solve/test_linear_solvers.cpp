@@ -265,6 +265,57 @@ TEST(LinearSolvers, DirectReusesSymbolicAnalysisAndWarmStartHelps) {
   EXPECT_LE(warm.iterations, 1);
 }
 
+// reuse_factorization: a nearby matrix on the same pattern is solved by CG preconditioned by the
+// kept factor, to the tolerance, without factorizing; a distant one, an indefinite one's factor, or
+// a pattern analysed in between (which drops the numbers) makes it factorize.
+TEST(LinearSolvers, DirectReusesItsFactorizationForNearbyMatrices) {
+  const TetMesh mesh = test::box(Vec3(1.0, 0.5, 0.5), {4, 2, 2});
+  std::vector<AnchorMask> anchors(mesh.positions.size(), anchor_none);
+  for (std::size_t v = 0; v < anchors.size(); ++v)
+    if (mesh.positions[v].x() == 0.0) anchors[v] = anchor_all;
+  BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, anchors);
+  LinearSolver direct(LinearSolverOptions{
+      .kind = LinearSolverKind::direct_ldlt, .relative_tolerance = 1e-6, .reuse_factorization = true});
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(m.size(), -1.0, 2.0);
+  Eigen::VectorXd x;
+  const std::vector<Mat12> ke = random_spd_elements(mesh.tets.size(), 40);
+  m.refill([&](Index e) { return ke[e]; });
+  LinearSolveReport rep = direct.solve(m, b, x);
+  ASSERT_TRUE(rep.converged);
+  EXPECT_TRUE(rep.factorized);
+  // 1 % away: the kept factor preconditions CG.
+  m.refill([&](Index e) { return Mat12(1.01 * ke[e] + 1e-4 * Mat12::Identity()); });
+  rep = direct.solve(m, b, x);
+  ASSERT_TRUE(rep.converged);
+  EXPECT_FALSE(rep.factorized);
+  EXPECT_GT(rep.iterations, 0);
+  EXPECT_LE(rep.relative_residual, 1e-6);
+  // Another matrix altogether: CG does not converge within its budget, so it factorizes.
+  const std::vector<Mat12> far = random_spd_elements(mesh.tets.size(), 99);
+  m.refill([&](Index e) { return far[e]; });
+  rep = direct.solve(m, b, x);
+  ASSERT_TRUE(rep.converged);
+  EXPECT_TRUE(rep.factorized);
+  EXPECT_LE(rep.relative_residual, 1e-12);
+  // Another pattern analysed in between drops the numeric factor.
+  BlockSparseMatrix other(mesh.num_nodes(), mesh.tets, anchors);
+  other.refill([&](Index e) { return far[e]; });
+  (void)direct.direct_cost(other);
+  rep = direct.solve(m, b, x);
+  ASSERT_TRUE(rep.converged);
+  EXPECT_TRUE(rep.factorized);
+  EXPECT_LE(rep.relative_residual, 1e-12);
+  // The factor of an indefinite matrix is never kept.
+  m.refill([&](Index e) { return Mat12(far[e] - 3.0 * Mat12::Identity()); });
+  rep = direct.solve(m, b, x);
+  EXPECT_TRUE(rep.factorized);
+  EXPECT_TRUE(rep.indefinite);
+  m.refill([&](Index e) { return far[e]; });
+  rep = direct.solve(m, b, x);
+  EXPECT_TRUE(rep.factorized);
+  EXPECT_LE(rep.relative_residual, 1e-12);
+}
+
 TEST(LinearSolvers, BadInputGivesReportNotNaN) {
   const TetMesh mesh = test::box(Vec3(1.0, 1.0, 1.0), {2, 2, 2});
   BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, {});  // nothing held: the zero matrix is singular

@@ -40,6 +40,12 @@ struct LinearSolverOptions {
   /// PCG starts from the x passed in (the previous solution, when the caller keeps it) instead of
   /// from zero. The direct solver ignores it.
   bool warm_start = false;
+  /// Direct solver: while the last factorization (of a positive definite matrix on the same
+  /// pattern) is kept, first try CG preconditioned by it, to relative_tolerance, for at most the
+  /// iterations that cost a quarter of a factorization; refactor only when that does not converge.
+  /// Newton's matrices change little from one iteration to the next, and an impact's static solve
+  /// refactored on every one.
+  bool reuse_factorization = false;
 };
 
 /// How one linear solve went.
@@ -49,6 +55,7 @@ struct LinearSolveReport {
   double relative_residual = 0;  ///< ||b - A x|| / ||b|| (0 when b = 0)
   double time_ms = 0;            ///< wall time of the whole solve, ms
   bool analyzed = false;         ///< direct: this call redid the symbolic analysis
+  bool factorized = false;       ///< direct: this call factorized (else it reused the last factor)
   /// The matrix showed it is not positive definite: a diagonal block or a CG curvature p.Ap that
   /// is not positive, or a pivot of the factorization that is not. The direct solver still returns
   /// its (exact) solution then; PCG stops where it found out.
@@ -107,8 +114,14 @@ class LinearSolver {
   LinearSolverOptions options_;
   void analyze(const BlockSparseMatrix& a, LinearSolveReport* report);
 
+  /// CG preconditioned by the kept factorization (reuse_factorization); false when it did not
+  /// converge within `max_iterations` (x is then undefined).
+  bool solve_with_kept_factor(const BlockSparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+                              int max_iterations, LinearSolveReport& report);
+
   detail::CountingLdlt ldlt_;
   std::uint64_t analyzed_pattern_ = 0;
+  std::uint64_t factored_pattern_ = 0;  ///< pattern of a kept positive definite factorization (0: none)
   int symbolic_analyses_ = 0;
   std::vector<Mat3> diagonal_inverse_;  ///< inverse diagonal blocks (#active)
   Eigen::VectorXd r_, z_, p_, q_;

@@ -1,6 +1,7 @@
 // PCG with block preconditioners and the reusable sparse LDL^T solver.
 #include "shatter/solve/linear_solvers.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -80,6 +81,7 @@ void LinearSolver::analyze(const BlockSparseMatrix& a, LinearSolveReport* report
   if (analyzed_pattern_ == a.pattern_id()) return;
   ldlt_.analyzePattern(a.matrix());
   analyzed_pattern_ = a.pattern_id();
+  factored_pattern_ = 0;  // the analysis drops the numeric factorization
   ++symbolic_analyses_;
   if (report != nullptr) report->analyzed = true;
 }
@@ -89,16 +91,61 @@ DirectCost LinearSolver::direct_cost(const BlockSparseMatrix& a) {
   return {.factor_flops = ldlt_.factor_flops(), .factor_nonzeros = ldlt_.factor_nonzeros()};
 }
 
+bool LinearSolver::solve_with_kept_factor(const BlockSparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x,
+                                          int max_iterations, LinearSolveReport& report) {
+  const double target = options_.relative_tolerance * b.norm();
+  x.setZero(a.size());
+  r_ = b;
+  z_ = ldlt_.solve(r_);
+  p_ = z_;
+  double rz = r_.dot(z_);
+  double r_norm = r_.norm();
+  int it = 0;
+  while (r_norm > target && it < max_iterations) {
+    a.multiply(p_, q_);
+    const double pq = p_.dot(q_);
+    if (!(pq > 0.0) || !(rz > 0.0)) return false;  // the factorization decides (and reports it)
+    const double alpha = rz / pq;
+    x.noalias() += alpha * p_;
+    r_.noalias() -= alpha * q_;
+    r_norm = r_.norm();
+    ++it;
+    if (r_norm <= target) break;
+    z_ = ldlt_.solve(r_);
+    const double rz_new = r_.dot(z_);
+    p_ = z_ + (rz_new / rz) * p_;
+    rz = rz_new;
+  }
+  if (!(r_norm <= target) || !all_finite(x)) return false;
+  report.iterations = it;
+  return true;
+}
+
 LinearSolveReport LinearSolver::solve_direct(const BlockSparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   LinearSolveReport report;
   analyze(a, &report);
+  if (options_.reuse_factorization && factored_pattern_ == a.pattern_id()) {
+    // A CG iteration reads L twice and A once; a factorization does about factor_flops multiply-adds.
+    const double iteration_cost = 4.0 * ldlt_.factor_nonzeros() + 2.0 * a.num_values() + 10.0 * a.size();
+    const int budget = static_cast<int>(std::clamp(0.25 * ldlt_.factor_flops() / iteration_cost, 2.0, 30.0));
+    if (solve_with_kept_factor(a, b, x, budget, report)) {
+      a.multiply(x, q_);
+      report.relative_residual = (b - q_).norm() / b.norm();
+      report.converged = true;
+      return report;
+    }
+  }
+  factored_pattern_ = 0;
   ldlt_.factorize(a.matrix());
+  report.factorized = true;
+  report.iterations = 0;
   if (ldlt_.info() != Eigen::Success) {
     x.setZero(a.size());
     report.message = "sparse LDL^T factorization failed (singular matrix: is the body anchored?)";
     return report;
   }
   report.indefinite = !(ldlt_.vectorD().minCoeff() > 0.0);
+  if (!report.indefinite) factored_pattern_ = a.pattern_id();
   x = ldlt_.solve(b);
   if (!all_finite(x)) {
     x.setZero(a.size());

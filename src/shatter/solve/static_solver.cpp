@@ -437,7 +437,10 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
   // Inexact Newton: the linear residual need only be a tenth of what the Newton tolerance
   // allows, ||K dx - r|| <= 0.1 tol reference (never tighter than the linear option).
   LinearSolverOptions linear = options_.linear;
+  // Once chosen, the direct solver keeps its factorization while CG preconditioned by it converges
+  // quickly (LinearSolverOptions::reuse_factorization).
   if (prefer_direct_) linear.kind = LinearSolverKind::direct_ldlt;
+  linear.reuse_factorization = prefer_direct_;
   linear.relative_tolerance =
       std::max(linear.relative_tolerance,
                std::min(0.5, 0.1 * options_.relative_residual_tolerance / std::max(relative_residual, 1e-300)));
