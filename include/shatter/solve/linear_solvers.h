@@ -42,7 +42,8 @@ struct LinearSolverOptions {
   bool warm_start = false;
   /// Direct solver: while the last factorization (of a positive definite matrix on the same
   /// pattern) is kept, first try CG preconditioned by it, to relative_tolerance, for at most the
-  /// iterations that cost a quarter of a factorization; refactor only when that does not converge.
+  /// iterations that cost a quarter of a factorization; refactor only when that does not converge
+  /// (after such failures in a row, the next 1, 2, 4, then 8 solves refactor without trying).
   /// Newton's matrices change little from one iteration to the next, and an impact's static solve
   /// refactored on every one.
   bool reuse_factorization = false;
@@ -102,6 +103,14 @@ class LinearSolver {
   /// analysis for a later direct solve).
   DirectCost direct_cost(const BlockSparseMatrix& a);
 
+  /// Drop the kept numeric factorization (reuse_factorization), so that the next solves do not
+  /// depend on what was solved before.
+  void forget_factorization() {
+    factored_pattern_ = 0;
+    reuse_failures_ = 0;
+    reuse_skip_ = 0;
+  }
+
   /// Symbolic analyses done so far (the direct solver does one per new pattern).
   [[nodiscard]] int symbolic_analyses() const { return symbolic_analyses_; }
 
@@ -122,6 +131,8 @@ class LinearSolver {
   detail::CountingLdlt ldlt_;
   std::uint64_t analyzed_pattern_ = 0;
   std::uint64_t factored_pattern_ = 0;  ///< pattern of a kept positive definite factorization (0: none)
+  int reuse_failures_ = 0;              ///< reuse attempts that failed in a row
+  int reuse_skip_ = 0;                  ///< direct solves left to factorize without an attempt
   int symbolic_analyses_ = 0;
   std::vector<Mat3> diagonal_inverse_;  ///< inverse diagonal blocks (#active)
   Eigen::VectorXd r_, z_, p_, q_;

@@ -125,14 +125,24 @@ LinearSolveReport LinearSolver::solve_direct(const BlockSparseMatrix& a, const E
   LinearSolveReport report;
   analyze(a, &report);
   if (options_.reuse_factorization && factored_pattern_ == a.pattern_id()) {
-    // A CG iteration reads L twice and A once; a factorization does about factor_flops multiply-adds.
-    const double iteration_cost = 4.0 * ldlt_.factor_nonzeros() + 2.0 * a.num_values() + 10.0 * a.size();
-    const int budget = static_cast<int>(std::clamp(0.25 * ldlt_.factor_flops() / iteration_cost, 2.0, 30.0));
-    if (solve_with_kept_factor(a, b, x, budget, report)) {
-      a.multiply(x, q_);
-      report.relative_residual = (b - q_).norm() / b.norm();
-      report.converged = true;
-      return report;
+    // After attempts that failed in a row (matrices that change a lot between solves), the next
+    // 1, 2, 4 or 8 solves factorize without one.
+    if (reuse_skip_ > 0) {
+      --reuse_skip_;
+    } else {
+      // A CG iteration reads L twice and A once; a factorization does about factor_flops
+      // multiply-adds.
+      const double iteration_cost = 4.0 * ldlt_.factor_nonzeros() + 2.0 * a.num_values() + 10.0 * a.size();
+      const int budget = static_cast<int>(std::clamp(0.25 * ldlt_.factor_flops() / iteration_cost, 2.0, 30.0));
+      if (solve_with_kept_factor(a, b, x, budget, report)) {
+        reuse_failures_ = 0;
+        a.multiply(x, q_);
+        report.relative_residual = (b - q_).norm() / b.norm();
+        report.converged = true;
+        return report;
+      }
+      reuse_skip_ = 1 << std::min(reuse_failures_, 3);
+      ++reuse_failures_;
     }
   }
   factored_pattern_ = 0;

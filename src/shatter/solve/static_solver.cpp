@@ -213,6 +213,8 @@ Result<StaticReport> StaticSolver::solve(const FemModel& model, const StaticProb
       problem.anchors.empty() ? std::vector<AnchorMask>(static_cast<std::size_t>(st.n), anchor_none) : problem.anchors;
   if (Outcome input = check_inputs(st); !input.ok()) return st.finish(std::move(input));
   if (std::optional<Outcome> early = prepare(st)) return st.finish(std::move(*early));
+  // A factorization is reused within a solve only: the result depends on this solve's input alone.
+  linear_.forget_factorization();
 
   // Load stepping (automatic increments, as CalculiX's): easy steps let the next one grow, hard
   // ones make it shrink, and a failed step restarts from the last equilibrium at half the size.
