@@ -123,6 +123,18 @@ class LinearSolver {
   LinearSolverOptions options_;
   void analyze(const BlockSparseMatrix& a, LinearSolveReport* report);
 
+  /// How a run of conjugate_gradients ended.
+  struct CgEnd {
+    int iterations = 0;
+    double residual_norm = 0;  ///< ||r|| of the recurrence
+    bool breakdown = false;    ///< p.Ap or r.z not positive
+    bool indefinite = false;   ///< p.Ap not positive
+  };
+  /// Preconditioned CG on A x = b from r_ = b - A x (set by the caller) until ||r|| <= target or
+  /// max_iterations; precondition(r, z) sets z = M^-1 r.
+  template <class Precondition>
+  CgEnd conjugate_gradients(const BlockSparseMatrix& a, Eigen::VectorXd& x, double target, int max_iterations,
+                            Precondition&& precondition);
   /// CG preconditioned by the kept factorization (reuse_factorization); false when it did not
   /// converge within `max_iterations` (x is then undefined).
   bool solve_with_kept_factor(const BlockSparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x,

@@ -91,33 +91,47 @@ DirectCost LinearSolver::direct_cost(const BlockSparseMatrix& a) {
   return {.factor_flops = ldlt_.factor_flops(), .factor_nonzeros = ldlt_.factor_nonzeros()};
 }
 
+template <class Precondition>
+LinearSolver::CgEnd LinearSolver::conjugate_gradients(const BlockSparseMatrix& a, Eigen::VectorXd& x, double target,
+                                                      int max_iterations, Precondition&& precondition) {
+  CgEnd end;
+  double r_norm = r_.norm();
+  precondition(r_, z_);
+  p_ = z_;
+  double rz = r_.dot(z_);
+  while (r_norm > target && end.iterations < max_iterations) {
+    a.multiply(p_, q_);
+    const double pq = p_.dot(q_);
+    if (!(pq > 0.0) || !(rz > 0.0)) {
+      end.breakdown = true;
+      end.indefinite = !(pq > 0.0);
+      break;
+    }
+    const double alpha = rz / pq;
+    x.noalias() += alpha * p_;
+    r_.noalias() -= alpha * q_;
+    r_norm = r_.norm();
+    ++end.iterations;
+    if (r_norm <= target) break;
+    precondition(r_, z_);
+    const double rz_new = r_.dot(z_);
+    p_ = z_ + (rz_new / rz) * p_;
+    rz = rz_new;
+  }
+  end.residual_norm = r_norm;
+  return end;
+}
+
 bool LinearSolver::solve_with_kept_factor(const BlockSparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x,
                                           int max_iterations, LinearSolveReport& report) {
   const double target = options_.relative_tolerance * b.norm();
   x.setZero(a.size());
   r_ = b;
-  z_ = ldlt_.solve(r_);
-  p_ = z_;
-  double rz = r_.dot(z_);
-  double r_norm = r_.norm();
-  int it = 0;
-  while (r_norm > target && it < max_iterations) {
-    a.multiply(p_, q_);
-    const double pq = p_.dot(q_);
-    if (!(pq > 0.0) || !(rz > 0.0)) return false;  // the factorization decides (and reports it)
-    const double alpha = rz / pq;
-    x.noalias() += alpha * p_;
-    r_.noalias() -= alpha * q_;
-    r_norm = r_.norm();
-    ++it;
-    if (r_norm <= target) break;
-    z_ = ldlt_.solve(r_);
-    const double rz_new = r_.dot(z_);
-    p_ = z_ + (rz_new / rz) * p_;
-    rz = rz_new;
-  }
-  if (!(r_norm <= target) || !all_finite(x)) return false;
-  report.iterations = it;
+  const CgEnd end = conjugate_gradients(a, x, target, max_iterations,
+                                        [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) { z = ldlt_.solve(r); });
+  // A breakdown is left to the factorization to decide (and report).
+  if (end.breakdown || !(end.residual_norm <= target) || !all_finite(x)) return false;
+  report.iterations = end.iterations;
   return true;
 }
 
@@ -246,31 +260,15 @@ LinearSolveReport LinearSolver::solve_pcg(const BlockSparseMatrix& a, const Eige
     r_ = b - q_;
   }
   const double target = options_.relative_tolerance * b_norm;
-  double r_norm = r_.norm();
-  apply_preconditioner(a, r_, z_);
-  p_ = z_;
-  double rz = r_.dot(z_);
-  int it = 0;
-  while (r_norm > target && it < options_.max_iterations) {
-    a.multiply(p_, q_);
-    const double pq = p_.dot(q_);
-    if (!(pq > 0.0) || !(rz > 0.0)) {
-      report.message = "matrix or preconditioner is not positive definite (CG breakdown)";
-      report.indefinite = !(pq > 0.0);
-      break;
-    }
-    const double alpha = rz / pq;
-    x.noalias() += alpha * p_;
-    r_.noalias() -= alpha * q_;
-    r_norm = r_.norm();
-    ++it;
-    if (r_norm <= target) break;
-    apply_preconditioner(a, r_, z_);
-    const double rz_new = r_.dot(z_);
-    p_ = z_ + (rz_new / rz) * p_;
-    rz = rz_new;
+  const CgEnd end =
+      conjugate_gradients(a, x, target, options_.max_iterations,
+                          [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) { apply_preconditioner(a, r, z); });
+  if (end.breakdown) {
+    report.message = "matrix or preconditioner is not positive definite (CG breakdown)";
+    report.indefinite = end.indefinite;
   }
-  report.iterations = it;
+  const double r_norm = end.residual_norm;
+  report.iterations = end.iterations;
   // The recurrence residual drifts from the true one; report the true one.
   a.multiply(x, q_);
   report.relative_residual = (b - q_).norm() / b_norm;
