@@ -31,6 +31,14 @@ std::vector<AnchorMask> mixed_anchors(const TetMesh& mesh) {
   return a;
 }
 
+// The x = 0 face held, the rest free.
+std::vector<AnchorMask> held_at_x0(const TetMesh& mesh) {
+  std::vector<AnchorMask> anchors(mesh.positions.size(), anchor_none);
+  for (std::size_t v = 0; v < anchors.size(); ++v)
+    if (mesh.positions[v].x() == 0.0) anchors[v] = anchor_all;
+  return anchors;
+}
+
 // Dense 3N x 3N stiffness from triplets over all tets (no anchors).
 Eigen::MatrixXd dense_full(Index num_nodes, const std::vector<TetIndices>& tets, const std::vector<Mat12>& ke) {
   std::vector<Eigen::Triplet<double>> trip;
@@ -238,9 +246,7 @@ TEST(LinearSolvers, GaussSeidelNeedsFewerIterationsThanJacobi) {
 
 TEST(LinearSolvers, DirectReusesSymbolicAnalysisAndWarmStartHelps) {
   const TetMesh mesh = test::box(Vec3(1.0, 0.5, 0.5), {4, 2, 2});
-  std::vector<AnchorMask> anchors(mesh.positions.size(), anchor_none);
-  for (std::size_t v = 0; v < anchors.size(); ++v)
-    if (mesh.positions[v].x() == 0.0) anchors[v] = anchor_all;
+  const std::vector<AnchorMask> anchors = held_at_x0(mesh);
   BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, anchors);
   LinearSolver direct(LinearSolverOptions{.kind = LinearSolverKind::direct_ldlt});
   Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(m.size(), -1.0, 2.0), x;
@@ -270,9 +276,7 @@ TEST(LinearSolvers, DirectReusesSymbolicAnalysisAndWarmStartHelps) {
 // a pattern analysed in between (which drops the numbers) makes it factorize.
 TEST(LinearSolvers, DirectReusesItsFactorizationForNearbyMatrices) {
   const TetMesh mesh = test::box(Vec3(1.0, 0.5, 0.5), {4, 2, 2});
-  std::vector<AnchorMask> anchors(mesh.positions.size(), anchor_none);
-  for (std::size_t v = 0; v < anchors.size(); ++v)
-    if (mesh.positions[v].x() == 0.0) anchors[v] = anchor_all;
+  const std::vector<AnchorMask> anchors = held_at_x0(mesh);
   BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, anchors);
   LinearSolver direct(LinearSolverOptions{
       .kind = LinearSolverKind::direct_ldlt, .relative_tolerance = 1e-6, .reuse_factorization = true});
