@@ -1,6 +1,7 @@
 // Exact and lumped mass properties of a tet mesh (see mass_properties.h).
 #include "shatter/mesh/mass_properties.h"
 
+#include <array>
 #include <vector>
 
 namespace shatter {
@@ -10,25 +11,40 @@ MassProperties mass_properties(const TetMesh& mesh, double density) {
   if (mesh.tets.empty()) return m;
   // Moments about a reference point near the body (its first node) to limit cancellation.
   const Vec3 ref = mesh.positions[mesh.tets[0][0]];
+  // Scalar accumulators: the symmetric second moment has six distinct entries (xx yy zz xy xz yz),
+  // summed per tet in the order of s s^T + r0 r0^T + ... + r3 r3^T, then scaled by v / 20.
   double volume = 0;
-  Vec3 first = Vec3::Zero();   // integral of r dV
-  Mat3 second = Mat3::Zero();  // integral of r r^T dV
-  for (Index e = 0; e < mesh.num_tets(); ++e) {
+  double fx = 0, fy = 0, fz = 0;  // integral of r dV
+  std::array<double, 6> second{};  // integral of r r^T dV: xx yy zz xy xz yz
+  constexpr int kA[6] = {0, 1, 2, 0, 0, 1};
+  constexpr int kB[6] = {0, 1, 2, 1, 2, 2};
+  const Vec3* pos = mesh.positions.data();
+  for (const TetIndices& t : mesh.tets) {
     Vec3 r[4];
-    for (int k = 0; k < 4; ++k) r[k] = mesh.positions[mesh.tets[e][k]] - ref;
+    for (int k = 0; k < 4; ++k) r[k] = pos[t[k]] - ref;
     const double v = signed_volume(r[0], r[1], r[2], r[3]);
     const Vec3 s = r[0] + r[1] + r[2] + r[3];
     volume += v;
-    first += v / 4.0 * s;
-    Mat3 c = s * s.transpose();
-    for (const Vec3& rk : r) c += rk * rk.transpose();
-    second += v / 20.0 * c;
+    const double w = v / 4.0;
+    fx += w * s.x();
+    fy += w * s.y();
+    fz += w * s.z();
+    const double w20 = v / 20.0;
+    for (int i = 0; i < 6; ++i) {
+      const int a = kA[i], b = kB[i];
+      double c = s[a] * s[b];
+      for (const Vec3& rk : r) c += rk[a] * rk[b];
+      second[i] += w20 * c;
+    }
   }
+  const Vec3 first(fx, fy, fz);
+  Mat3 second_moment;
+  second_moment << second[0], second[3], second[4], second[3], second[1], second[5], second[4], second[5], second[2];
   m.volume = volume;
   m.mass = density * volume;
   const Vec3 c = first / volume;
   m.center = ref + c;
-  const Mat3 central = density * (second - volume * c * c.transpose());
+  const Mat3 central = density * (second_moment - volume * c * c.transpose());
   m.inertia = central.trace() * Mat3::Identity() - central;
   return m;
 }
