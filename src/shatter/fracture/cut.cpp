@@ -335,11 +335,18 @@ DisconnectResult disconnect_faces(const TetMesh& mesh, const std::vector<std::in
     std::sort(f.begin(), f.end());
     return f;
   };
-  // Faces between + and - tets (local search from the marked tets).
+  // Faces between + and - tets (local search from the marked tets). Only a face whose three nodes
+  // all belong to some - tet can have one on its other side: the others need no search.
+  std::vector<char> on_minus(static_cast<std::size_t>(nn), 0);
+  for (Index e = 0; e < mesh.num_tets(); ++e)
+    if (tet_side[e] < 0)
+      for (Index v : mesh.tets[e]) on_minus[v] = 1;
   std::vector<Face> cut_faces;
   for (Index e = 0; e < mesh.num_tets(); ++e) {
     if (tet_side[e] <= 0) continue;
+    const TetIndices& t = mesh.tets[e];
     for (int k = 0; k < 4; ++k) {
+      if (!on_minus[t[kTetFaces[k][0]]] || !on_minus[t[kTetFaces[k][1]]] || !on_minus[t[kTetFaces[k][2]]]) continue;
       const Index n = face_neighbor(mesh, nt_of, e, k);
       if (n >= 0 && tet_side[n] < 0) cut_faces.push_back(face_key(e, k));
     }
