@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
+#include <cstdint>
 
 #include <Eigen/Eigenvalues>
 
@@ -46,26 +48,34 @@ BlockSparseMatrix::BlockSparseMatrix(Index num_nodes, const std::vector<TetIndic
 
   // Active tets and their greedy colouring (in tet order): a tet takes the smallest colour that
   // no tet sharing one of its nodes already has.
+  // The colours used at each node as bit sets of `words` 64-bit words (grown when a tet needs a
+  // colour beyond them); the smallest colour free at all four nodes is the lowest zero bit.
   std::vector<Index> tet_color;
-  std::vector<std::vector<Index>> node_colors(static_cast<std::size_t>(num_nodes));
-  std::vector<Index> candidates;
   std::vector<Index> active;
+  std::size_t words = 1;
+  std::vector<std::uint64_t> used(static_cast<std::size_t>(num_nodes), 0);
   for (Index e = 0; e < static_cast<Index>(tets.size()); ++e) {
     const TetIndices& t = tets[e];
     if (active_of_node_[t[0]] < 0 && active_of_node_[t[1]] < 0 && active_of_node_[t[2]] < 0 &&
         active_of_node_[t[3]] < 0)
       continue;
-    candidates.clear();
-    for (Index v : t) candidates.insert(candidates.end(), node_colors[v].begin(), node_colors[v].end());
-    std::sort(candidates.begin(), candidates.end());
-    Index color = 0;
-    for (Index c : candidates) {
-      if (c == color)
-        ++color;
-      else if (c > color)
-        break;
+    Index color = -1;
+    for (std::size_t w = 0; w < words && color < 0; ++w) {
+      std::uint64_t taken = 0;
+      for (Index v : t) taken |= used[static_cast<std::size_t>(v) * words + w];
+      if (~taken != 0) color = static_cast<Index>(64 * w) + std::countr_zero(~taken);
     }
-    for (Index v : t) node_colors[v].push_back(color);
+    if (color < 0) {  // every colour of the words in use is taken at some corner: one word more
+      std::vector<std::uint64_t> wider(static_cast<std::size_t>(num_nodes) * (words + 1), 0);
+      for (std::size_t v = 0; v < static_cast<std::size_t>(num_nodes); ++v)
+        std::copy_n(used.begin() + static_cast<std::ptrdiff_t>(v * words), words,
+                    wider.begin() + static_cast<std::ptrdiff_t>(v * (words + 1)));
+      used.swap(wider);
+      color = static_cast<Index>(64 * words);
+      ++words;
+    }
+    const std::size_t w = static_cast<std::size_t>(color) / 64;
+    for (Index v : t) used[static_cast<std::size_t>(v) * words + w] |= std::uint64_t{1} << (color % 64);
     active.push_back(e);
     tet_color.push_back(color);
   }
@@ -82,31 +92,37 @@ BlockSparseMatrix::BlockSparseMatrix(Index num_nodes, const std::vector<TetIndic
   active_tet_nodes_.resize(active_tets_.size());
   for (std::size_t s = 0; s < active_tets_.size(); ++s) active_tet_nodes_[s] = tets[active_tets_[s]];
 
-  // Block pattern: active node pairs sharing a tet.
-  std::vector<std::vector<Index>> neighbours(static_cast<std::size_t>(na));
+  // Block pattern: active node pairs sharing a tet. The active tets of each active node (CSR by
+  // counting), then per node the sorted distinct active nodes of those tets.
+  std::vector<Index> tets_begin(static_cast<std::size_t>(na) + 1, 0);
   for (const TetIndices& t : active_tet_nodes_)
-    for (Index v : t) {
-      const Index a = active_of_node_[v];
-      if (a < 0) continue;
-      for (Index w : t) {
-        const Index b = active_of_node_[w];
-        if (b >= 0) neighbours[a].push_back(b);
-      }
-    }
+    for (Index v : t)
+      if (const Index a = active_of_node_[v]; a >= 0) ++tets_begin[a + 1];
+  for (Index a = 0; a < na; ++a) tets_begin[a + 1] += tets_begin[a];
+  std::vector<Index> tets_of(static_cast<std::size_t>(tets_begin[na]));
+  {
+    std::vector<Index> fill(tets_begin.begin(), tets_begin.end() - 1);
+    for (std::size_t s = 0; s < active_tet_nodes_.size(); ++s)
+      for (Index v : active_tet_nodes_[s])
+        if (const Index a = active_of_node_[v]; a >= 0) tets_of[fill[a]++] = static_cast<Index>(s);
+  }
   block_ptr_.assign(static_cast<std::size_t>(na) + 1, 0);
   diagonal_block_.assign(static_cast<std::size_t>(na), -1);
+  block_col_.clear();
+  block_col_.reserve(static_cast<std::size_t>(tets_begin[na]));
+  std::vector<Index> nb;
   for (Index a = 0; a < na; ++a) {
-    std::vector<Index>& nb = neighbours[a];
+    nb.clear();
+    for (Index k = tets_begin[a]; k < tets_begin[a + 1]; ++k)
+      for (Index w : active_tet_nodes_[tets_of[k]])
+        if (const Index b = active_of_node_[w]; b >= 0) nb.push_back(b);
     std::sort(nb.begin(), nb.end());
     nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
-    block_ptr_[a + 1] = block_ptr_[a] + static_cast<Index>(nb.size());
-  }
-  block_col_.reserve(static_cast<std::size_t>(block_ptr_[na]));
-  for (Index a = 0; a < na; ++a) {
-    for (Index b : neighbours[a]) {
+    for (Index b : nb) {
       if (b == a) diagonal_block_[a] = static_cast<Index>(block_col_.size());
       block_col_.push_back(b);
     }
+    block_ptr_[a + 1] = static_cast<Index>(block_col_.size());
     SHATTER_CHECK(diagonal_block_[a] >= 0);
   }
 

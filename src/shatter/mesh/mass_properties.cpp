@@ -14,7 +14,7 @@ MassProperties mass_properties(const TetMesh& mesh, double density) {
   // Scalar accumulators: the symmetric second moment has six distinct entries (xx yy zz xy xz yz),
   // summed per tet in the order of s s^T + r0 r0^T + ... + r3 r3^T, then scaled by v / 20.
   double volume = 0;
-  double fx = 0, fy = 0, fz = 0;  // integral of r dV
+  double fx = 0, fy = 0, fz = 0;   // integral of r dV
   std::array<double, 6> second{};  // integral of r r^T dV: xx yy zz xy xz yz
   constexpr int kA[6] = {0, 1, 2, 0, 0, 1};
   constexpr int kB[6] = {0, 1, 2, 1, 2, 2};
