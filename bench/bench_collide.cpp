@@ -4,6 +4,8 @@
 // convex decomposition of bodies and shards, and the integration step of 1,000 tumbling bodies.
 #include <benchmark/benchmark.h>
 
+#include "bench_main.h"
+
 #include <cmath>
 #include <numbers>
 
@@ -207,4 +209,4 @@ BENCHMARK(BM_ConvexDecomposition)->ArgName("case")->DenseRange(0, 3)->Unit(bench
 }  // namespace
 }  // namespace shatter
 
-BENCHMARK_MAIN();
+SHATTER_BENCHMARK_MAIN()

@@ -2,6 +2,8 @@
 // element stiffness, on jittered box meshes with a small random deformation. Counter: time per tet.
 #include <benchmark/benchmark.h>
 
+#include "bench_main.h"
+
 #include <map>
 #include <memory>
 #include <utility>
@@ -126,4 +128,4 @@ BENCHMARK(BM_TetStiffness)->ArgNames({"model"})->Arg(kStvk)->Arg(kLinear)->Arg(k
 
 }  // namespace
 }  // namespace shatter
-BENCHMARK_MAIN();
+SHATTER_BENCHMARK_MAIN()

@@ -2,6 +2,8 @@
 // beyond the static solve), at 4k and 40k tets.
 #include <benchmark/benchmark.h>
 
+#include "bench_main.h"
+
 #include <cmath>
 #include <map>
 
@@ -86,4 +88,4 @@ BENCHMARK(BM_ExtractFragments)->Arg(4000)->Arg(40000)->Unit(benchmark::kMillisec
 }  // namespace
 }  // namespace shatter
 
-BENCHMARK_MAIN();
+SHATTER_BENCHMARK_MAIN()

@@ -10,6 +10,8 @@
 //   impact_40k: one impact analysis (solve and fracture) of a 40k-tet glass bar.
 #include <benchmark/benchmark.h>
 
+#include "bench_main.h"
+
 #include <algorithm>
 #include <chrono>
 #include <memory>
@@ -147,4 +149,4 @@ BENCHMARK(BM_Impact40k)->Unit(benchmark::kMillisecond)->MinTime(1.0);
 }  // namespace
 }  // namespace shatter
 
-BENCHMARK_MAIN();
+SHATTER_BENCHMARK_MAIN()

@@ -2,6 +2,8 @@
 // (cinder block) at about 10k, 100k and 1M tets, and the sphere with grading.
 #include <benchmark/benchmark.h>
 
+#include "bench_main.h"
+
 #include <cmath>
 #include <numbers>
 
@@ -57,4 +59,4 @@ BENCHMARK(BM_StuffCinderBlock)->Arg(1'000'000)->Iterations(1)->Unit(benchmark::k
 }  // namespace
 }  // namespace shatter
 
-BENCHMARK_MAIN();
+SHATTER_BENCHMARK_MAIN()

@@ -3,6 +3,8 @@
 // with each linear solver. Results and the command line: docs/solver.md.
 #include <benchmark/benchmark.h>
 
+#include "bench_main.h"
+
 #include <cmath>
 
 #include "shatter/fem/fem_model.h"
@@ -238,4 +240,4 @@ BENCHMARK(BM_DynamicStep)->Arg(4)->Arg(8)->Unit(benchmark::kMillisecond);
 }  // namespace
 }  // namespace shatter
 
-BENCHMARK_MAIN();
+SHATTER_BENCHMARK_MAIN()

@@ -7,6 +7,8 @@
 //   pile:    100 pieces dropped into a pile, the first 2 s.
 #include <benchmark/benchmark.h>
 
+#include "bench_main.h"
+
 #include <chrono>
 
 #include "world/world_scenes.h"
@@ -200,4 +202,4 @@ BENCHMARK(BM_BulletStep)->ArgName("scene")->DenseRange(0, 3)->Unit(benchmark::kM
 }  // namespace
 }  // namespace shatter
 
-BENCHMARK_MAIN();
+SHATTER_BENCHMARK_MAIN()

@@ -10,6 +10,7 @@
 
 #include "command.h"
 #include "shatter/core/log.h"
+#include "shatter/core/memory.h"
 
 namespace shatter::cli {
 namespace {
@@ -70,6 +71,9 @@ int report_error(const std::string& message, int code) {
 
 int main(int argc, char** argv) {
   using namespace shatter::cli;
+  // Impact steps free and reallocate large arrays: keep that memory instead of faulting in fresh
+  // pages every step (core/memory.h).
+  shatter::keep_freed_memory();
   CLI::App app{"shatter: deformation and fracture of stiff solids on tetrahedral meshes"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("shatter 0.1.0"));

@@ -14,6 +14,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: drop VASE_MESH\n");
     return 2;
   }
+  // A simulation frees and reallocates large arrays at every impact: keep that memory in the
+  // process (see shatter/core/memory.h).
+  keep_freed_memory();
   auto read = read_mesh(argv[1]);
   if (!read) {
     std::fprintf(stderr, "drop: %s\n", read.error().to_string().c_str());

@@ -8,6 +8,7 @@
 #include "shatter/core/error.h"
 #include "shatter/core/hash.h"
 #include "shatter/core/log.h"
+#include "shatter/core/memory.h"
 #include "shatter/core/parallel.h"
 #include "shatter/core/random.h"
 #include "shatter/core/types.h"

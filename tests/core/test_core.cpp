@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <numeric>
@@ -9,9 +10,14 @@
 #include <thread>
 #include <vector>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 #include "shatter/core/error.h"
 #include "shatter/core/file_io.h"
 #include "shatter/core/hash.h"
+#include "shatter/core/memory.h"
 #include "shatter/core/parallel.h"
 #include "shatter/core/random.h"
 #include "support/test_support.h"
@@ -60,6 +66,36 @@ TEST(Hash, StableAndSensitive) {
   EXPECT_EQ(g.digest(), h.digest());
   const double w[3] = {1.0, 2.0, 3.0000000000000004};
   EXPECT_NE(hash_bytes(v, sizeof v), hash_bytes(w, sizeof w));
+}
+
+// Sanitizers replace the allocator (their mallopt does nothing): the settings are glibc's.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define SHATTER_TEST_OWN_ALLOCATOR 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || __has_feature(memory_sanitizer)
+#define SHATTER_TEST_OWN_ALLOCATOR 1
+#endif
+#endif
+
+TEST(Memory, FreedBlocksStayInTheProcess) {
+#if defined(SHATTER_TEST_OWN_ALLOCATOR)
+  GTEST_SKIP() << "a sanitizer's allocator replaces glibc's";
+#elif defined(__GLIBC__)
+  ASSERT_TRUE(keep_freed_memory());
+  // An 8 MiB block, by default mmapped and unmapped when freed, now comes from the heap and stays
+  // there as free memory.
+  constexpr std::size_t kBlock = std::size_t{8} << 20;
+  const std::size_t mapped_before = mallinfo2().hblkhd;
+  auto* block = static_cast<volatile char*>(std::malloc(kBlock));
+  ASSERT_NE(block, nullptr);
+  block[0] = 1;
+  block[kBlock - 1] = 1;
+  EXPECT_EQ(mallinfo2().hblkhd, mapped_before);
+  std::free(const_cast<char*>(block));
+  EXPECT_GE(mallinfo2().fordblks, kBlock);
+#else
+  EXPECT_FALSE(keep_freed_memory());
+#endif
 }
 
 TEST(Parallel, SumIndependentOfThreadCount) {
