@@ -84,6 +84,10 @@ struct ContactConstraint {
   double friction = 0.6;                                       ///< Coulomb coefficient (static = dynamic)
   double restitution = 0;                                      ///< coefficient of restitution
   Softness softness;  ///< from the world's contact spring (stiffer with static bodies)
+  /// Whether impulses change A's (B's) velocity: false for a body with zero inverse mass and
+  /// inertia (static, kinematic, asleep), which the solver then never writes (prepare_contact).
+  bool a_responds = true;
+  bool b_responds = true;
   std::array<ContactPoint, 4> points{};
   int count = 0;
   // Friction at the friction centre (the points' mean, gaps weighted down).

@@ -12,12 +12,19 @@ namespace {
 Vec3 point_velocity(const SolverBody& b, const Vec3& r) { return b.linear_velocity + b.angular_velocity.cross(r); }
 
 // Apply impulse l along unit direction d (on B; -l d on A) whose angular responses are ang_a and
-// ang_b (I^-1 (r x d) of each body).
-void apply_row(SolverBody& a, SolverBody& b, const Vec3& d, const Vec3& ang_a, const Vec3& ang_b, double l) {
-  a.linear_velocity -= (a.inverse_mass * l) * d;
-  a.angular_velocity -= l * ang_a;
-  b.linear_velocity += (b.inverse_mass * l) * d;
-  b.angular_velocity += l * ang_b;
+// ang_b (I^-1 (r x d) of each body). A body without response (static, kinematic, asleep: zero
+// inverse mass and inertia) is left alone: its velocity would only change by zero, and every
+// contact with the ground would otherwise write the ground's one slot, each waiting for the last.
+void apply_row(const ContactConstraint& c, SolverBody& a, SolverBody& b, const Vec3& d, const Vec3& ang_a,
+               const Vec3& ang_b, double l) {
+  if (c.a_responds) {
+    a.linear_velocity -= (a.inverse_mass * l) * d;
+    a.angular_velocity -= l * ang_a;
+  }
+  if (c.b_responds) {
+    b.linear_velocity += (b.inverse_mass * l) * d;
+    b.angular_velocity += l * ang_b;
+  }
 }
 
 // Relative velocity along a row: d . (v_B - v_A) + r_b . w_B - r_a . w_A (r = anchor x d).
@@ -36,19 +43,19 @@ double solve_normal(ContactConstraint& c, ContactPoint& p, SolverBody& a, Solver
   p.normal_impulse = next;
   p.max_normal_impulse = std::max(p.max_normal_impulse, next);
   p.total_normal_impulse += applied;
-  apply_row(a, b, c.normal, p.ang_a, p.ang_b, applied);
+  apply_row(c, a, b, c.normal, p.ang_a, p.ang_b, applied);
   return applied;
 }
 
 // Apply the friction impulse f (x along tangent 0, y along tangent 1) at the friction centre.
 void apply_friction(const ContactConstraint& c, SolverBody& a, SolverBody& b, const Eigen::Vector2d& f) {
-  apply_row(a, b, c.tangents[0], c.ang_ta[0], c.ang_tb[0], f.x());
-  apply_row(a, b, c.tangents[1], c.ang_ta[1], c.ang_tb[1], f.y());
+  apply_row(c, a, b, c.tangents[0], c.ang_ta[0], c.ang_tb[0], f.x());
+  apply_row(c, a, b, c.tangents[1], c.ang_ta[1], c.ang_tb[1], f.y());
 }
 // Apply the twist impulse t about the normal.
 void apply_twist(const ContactConstraint& c, SolverBody& a, SolverBody& b, double t) {
-  a.angular_velocity -= t * c.twist_a;
-  b.angular_velocity += t * c.twist_b;
+  if (c.a_responds) a.angular_velocity -= t * c.twist_a;
+  if (c.b_responds) b.angular_velocity += t * c.twist_b;
 }
 
 }  // namespace
@@ -72,6 +79,8 @@ std::array<Vec3, 2> tangent_basis(const Vec3& n) {
 void prepare_contact(ContactConstraint& c, std::span<const SolverBody> bodies, double speculative_distance) {
   const SolverBody& a = bodies[c.body_a];
   const SolverBody& b = bodies[c.body_b];
+  c.a_responds = a.inverse_mass != 0 || !a.inverse_inertia.isZero(0);
+  c.b_responds = b.inverse_mass != 0 || !b.inverse_inertia.isZero(0);
   c.tangents = tangent_basis(c.normal);
   // Friction centre: the mean of the points, those with a gap fading out over the speculative
   // distance so that the centre moves smoothly as points come and go (Box3D's weighting).
@@ -125,7 +134,7 @@ void warm_start_contact(ContactConstraint& c, std::span<SolverBody> bodies) {
   SolverBody& b = bodies[c.body_b];
   for (int i = 0; i < c.count; ++i) {
     ContactPoint& p = c.points[i];
-    apply_row(a, b, c.normal, p.ang_a, p.ang_b, p.normal_impulse);
+    apply_row(c, a, b, c.normal, p.ang_a, p.ang_b, p.normal_impulse);
     p.total_normal_impulse += p.normal_impulse;
   }
   apply_friction(c, a, b, c.friction_impulse);
