@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <numeric>
 #include <span>
@@ -162,22 +163,24 @@ CutResult split_along_plane(const TetMesh& mesh, const CutPlane& plane, const st
 
   // Node signs with snapping: |d| <= snap_fraction x shortest incident region edge counts as 0.
   std::vector<double> dist(nn, 0.0);
-  std::vector<double> h(nn, std::numeric_limits<double>::infinity());
+  // Shortest squared edge per node: sqrt is correctly rounded and monotone, so the square root of
+  // the least square is the least length, bit for bit, for one root per node instead of per edge.
+  std::vector<double> h2(nn, std::numeric_limits<double>::infinity());
   std::vector<int> sign(nn, 0);
   for (Index e : region) {
     const TetIndices& t = mesh.tets[e];
     for (int a = 0; a < 4; ++a)
       for (int b = a + 1; b < 4; ++b) {
-        const double l = (mesh.positions[t[a]] - mesh.positions[t[b]]).norm();
-        h[t[a]] = std::min(h[t[a]], l);
-        h[t[b]] = std::min(h[t[b]], l);
+        const double l2 = (mesh.positions[t[a]] - mesh.positions[t[b]]).squaredNorm();
+        h2[t[a]] = std::min(h2[t[a]], l2);
+        h2[t[b]] = std::min(h2[t[b]], l2);
       }
   }
   for (Index e : region)
     for (Index v : mesh.tets[e]) {
       const double d = plane.normal.dot(mesh.positions[v] - plane.point);
       dist[v] = d;
-      sign[v] = std::abs(d) <= options.snap_fraction * h[v] ? 0 : (d > 0 ? 1 : -1);
+      sign[v] = std::abs(d) <= options.snap_fraction * std::sqrt(h2[v]) ? 0 : (d > 0 ? 1 : -1);
     }
   auto crossed = [&](Index e) {
     bool plus = false, minus = false;
@@ -215,15 +218,34 @@ CutResult split_along_plane(const TetMesh& mesh, const CutPlane& plane, const st
     edge_pos[i] = mesh.positions[a] + t * (mesh.positions[b] - mesh.positions[a]);
   }
   auto pos = [&](Index v) -> const Vec3& { return v < nn ? mesh.positions[v] : edge_pos[v - nn]; };
-  auto provisional = [&](Index a, Index b) { return nn + edge_rank(a, b); };
+  // The rank of each candidate's crossed edges, found once: local edge q of corners kTetEdges[q].
+  constexpr std::array<std::array<int, 2>, 6> kTetEdges{{{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}}};
+  std::vector<std::array<Index, 6>> cand_edge(cand.size());
+  for (std::size_t c = 0; c < cand.size(); ++c) {
+    const TetIndices& t = mesh.tets[cand[c]];
+    for (int q = 0; q < 6; ++q) {
+      const Index a = t[kTetEdges[q][0]], b = t[kTetEdges[q][1]];
+      cand_edge[c][q] = sign[a] * sign[b] < 0 ? edge_rank(a, b) : -1;
+    }
+  }
 
   // Pieces of each candidate; a candidate with a too small piece is dropped.
   std::vector<char> in_s(nt, 0);
   std::vector<Index> piece_begin;  // per candidate, into pieces (+ end)
   std::vector<Piece> pieces;
-  for (Index e : cand) {
+  for (std::size_t c = 0; c < cand.size(); ++c) {
+    const Index e = cand[c];
     piece_begin.push_back(static_cast<Index>(pieces.size()));
     const TetIndices& t = mesh.tets[e];
+    // The provisional node of crossed edge (a, b) of this tet: nn + its rank.
+    auto provisional = [&](Index a, Index b) {
+      for (int q = 0; q < 6; ++q) {
+        const Index u = t[kTetEdges[q][0]], w = t[kTetEdges[q][1]];
+        if ((u == a && w == b) || (u == b && w == a)) return nn + cand_edge[c][q];
+      }
+      SHATTER_ASSERT(false);
+      return Index{-1};
+    };
     const std::array<int, 4> s{sign[t[0]], sign[t[1]], sign[t[2]], sign[t[3]]};
     const double min_volume = options.min_volume_fraction * signed_volume(mesh, e);
     if (split_tet(t, s, provisional, pos, min_volume, pieces)) in_s[e] = 1;
@@ -231,32 +253,39 @@ CutResult split_along_plane(const TetMesh& mesh, const CutPlane& plane, const st
   piece_begin.push_back(static_cast<Index>(pieces.size()));
 
   // Conformity: an edge is split only if every tet around it is split, and a tet only if all its
-  // crossed edges are. Shrink both sets to the fixed point.
+  // crossed edges are. Shrink both sets to the fixed point (the largest one: the rules only ever
+  // remove, so the order of the passes does not change it). The tets around each edge are found
+  // once (CSR).
   const NodeTets nt_of = node_tets(mesh);
+  std::vector<Index> edge_tets_begin{0};
+  std::vector<Index> edge_tets;
+  edge_tets_begin.reserve(edges.size() + 1);
+  for (const Edge& edge : edges) {
+    const auto ta = nt_of.of(edge[0]);
+    const auto tb = nt_of.of(edge[1]);
+    std::set_intersection(ta.begin(), ta.end(), tb.begin(), tb.end(), std::back_inserter(edge_tets));
+    edge_tets_begin.push_back(static_cast<Index>(edge_tets.size()));
+  }
   std::vector<char> edge_alive(edges.size(), 1);
   for (bool changed = true; changed;) {
     changed = false;
     for (std::size_t i = 0; i < edges.size(); ++i) {
       if (!edge_alive[i]) continue;
-      const auto ta = nt_of.of(edges[i][0]);
-      const auto tb = nt_of.of(edges[i][1]);
-      for (Index e : ta)
-        if (std::binary_search(tb.begin(), tb.end(), e) && !in_s[e]) {
+      for (Index k = edge_tets_begin[i]; k < edge_tets_begin[i + 1]; ++k)
+        if (!in_s[edge_tets[k]]) {
           edge_alive[i] = 0;
           changed = true;
           break;
         }
     }
-    for (Index e : cand) {
-      if (!in_s[e]) continue;
-      const TetIndices& t = mesh.tets[e];
-      for (int a = 0; a < 4 && in_s[e]; ++a)
-        for (int b = a + 1; b < 4; ++b)
-          if (sign[t[a]] * sign[t[b]] < 0 && !edge_alive[edge_rank(t[a], t[b])]) {
-            in_s[e] = 0;
-            changed = true;
-            break;
-          }
+    for (std::size_t c = 0; c < cand.size(); ++c) {
+      if (!in_s[cand[c]]) continue;
+      for (const Index rank : cand_edge[c])
+        if (rank >= 0 && !edge_alive[rank]) {
+          in_s[cand[c]] = 0;
+          changed = true;
+          break;
+        }
     }
   }
 
