@@ -16,26 +16,32 @@ MassProperties mass_properties(const TetMesh& mesh, double density) {
   double volume = 0;
   double fx = 0, fy = 0, fz = 0;   // integral of r dV
   std::array<double, 6> second{};  // integral of r r^T dV: xx yy zz xy xz yz
-  constexpr int kA[6] = {0, 1, 2, 0, 0, 1};
-  constexpr int kB[6] = {0, 1, 2, 1, 2, 2};
   const Vec3* pos = mesh.positions.data();
   for (const TetIndices& t : mesh.tets) {
-    Vec3 r[4];
-    for (int k = 0; k < 4; ++k) r[k] = pos[t[k]] - ref;
-    const double v = signed_volume(r[0], r[1], r[2], r[3]);
-    const Vec3 s = r[0] + r[1] + r[2] + r[3];
+    const Vec3 r0 = pos[t[0]] - ref, r1 = pos[t[1]] - ref, r2 = pos[t[2]] - ref, r3 = pos[t[3]] - ref;
+    const double v = signed_volume(r0, r1, r2, r3);
+    const Vec3 s = r0 + r1 + r2 + r3;
     volume += v;
     const double w = v / 4.0;
     fx += w * s.x();
     fy += w * s.y();
     fz += w * s.z();
     const double w20 = v / 20.0;
-    for (int i = 0; i < 6; ++i) {
-      const int a = kA[i], b = kB[i];
+    // Entry (a, b) of s s^T + r0 r0^T + r1 r1^T + r2 r2^T + r3 r3^T, summed in that order.
+    const auto entry = [&](int a, int b) {
       double c = s[a] * s[b];
-      for (const Vec3& rk : r) c += rk[a] * rk[b];
-      second[i] += w20 * c;
-    }
+      c += r0[a] * r0[b];
+      c += r1[a] * r1[b];
+      c += r2[a] * r2[b];
+      c += r3[a] * r3[b];
+      return c;
+    };
+    second[0] += w20 * entry(0, 0);
+    second[1] += w20 * entry(1, 1);
+    second[2] += w20 * entry(2, 2);
+    second[3] += w20 * entry(0, 1);
+    second[4] += w20 * entry(0, 2);
+    second[5] += w20 * entry(1, 2);
   }
   const Vec3 first(fx, fy, fz);
   Mat3 second_moment;
