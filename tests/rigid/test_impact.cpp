@@ -185,6 +185,7 @@ TEST(ImpactAnalysis, FragmentsKeepMassMomentumAndFollowEq22) {
   add_momentum(parent, bar.mass, state.rigid);
   double mass = 0, volume = 0;
   Index crack_triangles = 0;
+  Index unchanged = 0, changed = 0;
   for (const ImpactChild& c : r->children) {
     const BodyModel& m = *c.model;
     mass += m.mass.mass;
@@ -227,7 +228,21 @@ TEST(ImpactAnalysis, FragmentsKeepMassMomentumAndFollowEq22) {
     // Rest coordinates for textures: the child's origin is where its centre was in the parent.
     EXPECT_LT((m.material_origin - (bar.material_origin + R.transpose() * (c.rigid.position - p.position))).norm(),
               1e-12);
+    // A tet is listed as unchanged exactly when its corners are its parent tet's less the origin,
+    // bitwise; the cuts changed some and left others.
+    ASSERT_EQ(c.unchanged_parent_tet.size(), c.parent_tet.size());
+    for (std::size_t e = 0; e < c.parent_tet.size(); ++e) {
+      const Index pt = c.parent_tet[e];
+      bool same = true;
+      for (int k = 0; k < 4; ++k)
+        same = same && m.mesh.positions[m.mesh.tets[e][k]] + c.origin == bar.mesh.positions[bar.mesh.tets[pt][k]];
+      EXPECT_EQ(c.unchanged_parent_tet[e], same ? pt : Index{-1}) << "tet " << e;
+      unchanged += same;
+      changed += !same;
+    }
   }
+  EXPECT_GT(unchanged, 0);
+  EXPECT_GT(changed, 0);
   EXPECT_GT(crack_triangles, 0);
   EXPECT_NEAR(mass, bar.mass.mass, 1e-12 * bar.mass.mass);
   EXPECT_NEAR(volume, bar.mass.volume, 1e-12 * bar.mass.volume);

@@ -457,10 +457,9 @@ class World {
       std::vector<std::vector<Index>> clusters, const BodyModel& model,
       const std::vector<const ConvexHull*>& moved = {}, const Vec3& shift = Vec3::Zero()) const;
   /// A fragment's pieces from its parent's: its tets grouped by the parent piece their parent tet
-  /// lay in. A piece the cut left whole (the same tets at the same rest positions, in the child's
-  /// frame) keeps its parent's hull, moved.
-  [[nodiscard]] Result<std::shared_ptr<const Shape>> inherit_shape(const Shape& parent, const BodyModel& parent_model,
-                                                                   const ImpactChild& child) const;
+  /// lay in. A piece whose tets the cut and plasticity all left unchanged
+  /// (ImpactChild::unchanged_parent_tet) keeps its parent's hull, moved into the child's frame.
+  [[nodiscard]] Result<std::shared_ptr<const Shape>> inherit_shape(const Shape& parent, const ImpactChild& child) const;
   void process_impacts();
   /// Replace body id by the outcome of its impact analysis; records the events.
   void apply_impact(Index id, Index other, ImpactResult& r);

@@ -304,6 +304,7 @@ void make_children(const BodyModel& model, const RigidState& rigid, const Fractu
     m->material_origin = model.material_origin + c;
     ImpactChild child;
     child.origin = c;
+    child.unchanged_parent_tet = same_rest;
     child.parent_tet.resize(f.tet_map.size());
     child.plastic_strain.resize(f.tet_map.size());
     for (std::size_t e = 0; e < f.tet_map.size(); ++e) {

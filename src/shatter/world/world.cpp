@@ -318,8 +318,7 @@ Result<std::shared_ptr<const World::Shape>> World::shape_from_clusters(std::vect
   return std::shared_ptr<const Shape>(std::move(shape));
 }
 
-Result<std::shared_ptr<const World::Shape>> World::inherit_shape(const Shape& parent, const BodyModel& parent_model,
-                                                                 const ImpactChild& child) const {
+Result<std::shared_ptr<const World::Shape>> World::inherit_shape(const Shape& parent, const ImpactChild& child) const {
   const std::vector<Index>& parent_tet = child.parent_tet;
   const BodyModel& model = *child.model;
   Index parent_tets = 0;
@@ -342,29 +341,27 @@ Result<std::shared_ptr<const World::Shape>> World::inherit_shape(const Shape& pa
     }
     clusters[slot[p]].push_back(static_cast<Index>(e));
   }
-  // A cluster is its parent piece moved when it has each of the piece's tets once, each at its
-  // parent's rest positions less the child's origin, bitwise: then its nodes are the piece's nodes
-  // moved, and so is their hull.
+  // A cluster is its parent piece moved when it has each of the piece's tets once, each left
+  // unchanged by the cut and plasticity (ImpactChild::unchanged_parent_tet: its corners are the
+  // parent's, bitwise, so in the child's frame the parent's less the origin): then its nodes are
+  // the piece's nodes moved, and so is their hull. A child without that list rebuilds every hull.
   std::vector<const ConvexHull*> moved(clusters.size(), nullptr);
-  const Vec3 shift = -child.origin;
+  const std::vector<Index>& unchanged = child.unchanged_parent_tet;
   std::vector<char> taken(static_cast<std::size_t>(parent_tets), 0);
-  for (std::size_t c = 0; c < clusters.size(); ++c) {
+  for (std::size_t c = 0; c < clusters.size() && unchanged.size() == parent_tet.size(); ++c) {
     const Index p = slot_piece[c];
     if (clusters[c].size() != parent.piece_tets[p].size()) continue;
     bool same = true;
     for (const Index e : clusters[c]) {
       const Index pt = parent_tet[e];
-      same = same && !taken[pt];
+      same = same && !taken[pt] && unchanged[e] == pt;
       taken[pt] = 1;
-      for (int k = 0; k < 4 && same; ++k)
-        same = model.mesh.positions[model.mesh.tets[e][k]] ==
-               Vec3(parent_model.mesh.positions[parent_model.mesh.tets[pt][k]] + shift);
       if (!same) break;
     }
     for (const Index e : clusters[c]) taken[parent_tet[e]] = 0;
     if (same) moved[c] = &parent.pieces[p];
   }
-  return shape_from_clusters(std::move(clusters), model, moved, shift);
+  return shape_from_clusters(std::move(clusters), model, moved, -child.origin);
 }
 
 Result<BodyId> World::add_hull(ConvexHull hull, const BodyDef& def) {
@@ -1048,7 +1045,7 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
     Body& body = bodies_[id];
     ImpactChild& child = r.children.front();
     auto shape = r.cracks.empty() ? shape_from_clusters(body.shape->piece_tets, *child.model)
-                                  : inherit_shape(*body.shape, *body.model, child);
+                                  : inherit_shape(*body.shape, child);
     if (shape) {
       body.shape = std::move(*shape);
       body.model = child.model;
@@ -1073,7 +1070,7 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
   const Body parent = bodies_[id];
   std::vector<Index> born;
   for (ImpactChild& child : r.children) {
-    auto shape = inherit_shape(*parent.shape, *parent.model, child);
+    auto shape = inherit_shape(*parent.shape, child);
     if (!shape) {  // a piece without a collision shape cannot take part: it goes as debris
       log_warning("world: a fragment of body " + std::to_string(id) + " became debris: " + shape.error().message);
       rec.debris_count += 1;
