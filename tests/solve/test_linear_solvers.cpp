@@ -4,7 +4,9 @@
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
 
+#include <cmath>
 #include <cstring>
+#include <numbers>
 
 #include "shatter/core/parallel.h"
 #include "shatter/core/random.h"
@@ -73,6 +75,40 @@ std::vector<Mat12> random_spd_elements(std::size_t count, std::uint64_t seed) {
     k = g * g.transpose() + 0.05 * Mat12::Identity();
   }
   return ke;
+}
+
+// Greedy colours beyond one 64-bit word: 150 tets round one hub node need 150 colours, each
+// tet the next one; a second fan beside it, sharing no node with the first, reuses them; and the
+// block pattern still matches a triplet assembly.
+TEST(Assembly, ColoursBeyondSixtyFourAndTheirPattern) {
+  TetMesh mesh;
+  constexpr int kFan = 150;
+  for (int fan = 0; fan < 2; ++fan) {
+    const auto hub = static_cast<Index>(mesh.positions.size());
+    const Vec3 centre(3.0 * fan, 0, 0);
+    mesh.positions.push_back(centre);
+    mesh.positions.push_back(centre + Vec3(0, 0, 1));
+    const auto ring = static_cast<Index>(mesh.positions.size());
+    for (int k = 0; k < kFan; ++k) {
+      const double angle = 2 * std::numbers::pi * k / kFan;
+      mesh.positions.push_back(centre + Vec3(std::cos(angle), std::sin(angle), 0));
+    }
+    for (int k = 0; k < kFan; ++k) mesh.tets.push_back({hub, ring + k, ring + (k + 1) % kFan, hub + 1});
+  }
+  const std::vector<AnchorMask> anchors(mesh.positions.size(), anchor_none);
+  BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, anchors);
+  ASSERT_EQ(m.num_colors(), kFan);
+  for (Index c = 0; c < m.num_colors(); ++c) {
+    ASSERT_EQ(m.color_ptr()[c + 1] - m.color_ptr()[c], 2);
+    EXPECT_EQ(m.active_tets()[m.color_ptr()[c]], c);             // fan 0: tet c takes colour c
+    EXPECT_EQ(m.active_tets()[m.color_ptr()[c] + 1], kFan + c);  // fan 1 reuses them
+  }
+  const std::vector<Mat12> ke = random_spd_elements(mesh.tets.size(), 5);
+  m.refill([&](Index e) { return ke[e]; });
+  const Eigen::MatrixXd full = dense_full(mesh.num_nodes(), mesh.tets, ke);
+  const Eigen::MatrixXd reduced = Eigen::MatrixXd(m.matrix());
+  ASSERT_EQ(reduced.rows(), full.rows());  // nothing held: every node active, in node order
+  EXPECT_LE((reduced - full).cwiseAbs().maxCoeff(), 1e-12 * full.cwiseAbs().maxCoeff());
 }
 
 TEST(Assembly, PatternRefillEqualsTripletAssembly) {
