@@ -1,9 +1,10 @@
-// Process-wide allocator settings for simulation (docs/performance.md, "Memory kept for reuse").
+// Process-wide allocator settings for simulation (docs/api.md, "Memory").
 //
 // An impact step allocates and frees arrays of 0.1-10 MB (element matrices, sparse patterns, the
 // symbolic analysis, cut meshes). By default glibc's allocator hands such blocks back to the
 // system when they are freed (mmap above a threshold, trimming the heap's top), so the next step
-// takes page faults on fresh pages again: measured, a third of a cinder block's breaking step.
+// takes page faults on fresh pages again: measured, about a fifth of a cinder block's breaking
+// step (docs/performance.md, "2026-12-03").
 // Keeping freed memory in the process removes that cost; the process then holds its peak heap.
 // A library must not change process-wide settings on its own: programs call this at start-up
 // (shatter's command-line tools and benchmarks do).

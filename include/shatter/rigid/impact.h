@@ -114,7 +114,7 @@ struct ImpactChild {
   std::vector<double> tensile_strength;  ///< per child tet, Pa (empty when the parent's was)
   std::vector<Index> parent_tet;         ///< the parent's tet each child tet lies in (#tets)
   /// Per child tet, its parent tet when the cut and plasticity left it as it was (its corners are
-  /// the parent's, bitwise), else -1 (#tets; empty: not known, World compares the corners itself).
+  /// the parent's, bitwise), else -1 (#tets; empty: not known, and World rebuilds every hull).
   std::vector<Index> unchanged_parent_tet;
   /// Origin of the child's body frame in the parent's body frame, m: a node at x in the child's
   /// frame lay at x + origin in the parent's (x is the parent's position less origin, bitwise, for
