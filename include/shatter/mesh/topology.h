@@ -14,6 +14,8 @@ namespace shatter {
 /// Local faces of a positively oriented tet (a,b,c,d): face k is opposite corner k and its
 /// corners, in this order, give the outward normal by the right-hand rule.
 inline constexpr std::array<std::array<int, 3>, 4> kTetFaces = {{{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}};
+/// Local edges of a tet: edge q joins corners kTetEdges[q][0] < kTetEdges[q][1].
+inline constexpr std::array<std::array<int, 2>, 6> kTetEdges = {{{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}}};
 
 /// The unique faces of a tet mesh and the tets on each side (compute_faces).
 struct TetFaces {

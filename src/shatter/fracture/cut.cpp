@@ -218,8 +218,7 @@ CutResult split_along_plane(const TetMesh& mesh, const CutPlane& plane, const st
     edge_pos[i] = mesh.positions[a] + t * (mesh.positions[b] - mesh.positions[a]);
   }
   auto pos = [&](Index v) -> const Vec3& { return v < nn ? mesh.positions[v] : edge_pos[v - nn]; };
-  // The rank of each candidate's crossed edges, found once: local edge q of corners kTetEdges[q].
-  constexpr std::array<std::array<int, 2>, 6> kTetEdges{{{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}}};
+  // The rank of each candidate's crossed edges, found once, by local edge (kTetEdges).
   std::vector<std::array<Index, 6>> cand_edge(cand.size());
   for (std::size_t c = 0; c < cand.size(); ++c) {
     const TetIndices& t = mesh.tets[cand[c]];

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "shatter/mesh/topology.h"
+
 namespace shatter {
 
 std::array<double, 6> dihedral_cosines(const Mat34& x) {
@@ -18,12 +20,11 @@ std::array<double, 6> dihedral_cosines(const Mat34& x) {
     const double len = nk.norm();
     n[k] = len > 0 ? Vec3(nk / len) : Vec3::Zero();
   }
-  constexpr int edges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
   std::array<double, 6> out{};
   for (int e = 0; e < 6; ++e) {
     int other[2], m = 0;
     for (int k = 0; k < 4; ++k)
-      if (k != edges[e][0] && k != edges[e][1]) other[m++] = k;
+      if (k != kTetEdges[e][0] && k != kTetEdges[e][1]) other[m++] = k;
     out[e] = -n[other[0]].dot(n[other[1]]);
   }
   return out;
