@@ -11,10 +11,10 @@ MassProperties mass_properties(const TetMesh& mesh, double density) {
   if (mesh.tets.empty()) return m;
   // Moments about a reference point near the body (its first node) to limit cancellation.
   const Vec3 ref = mesh.positions[mesh.tets[0][0]];
-  // Scalar accumulators: the symmetric second moment has six distinct entries (xx yy zz xy xz yz),
+  // The symmetric second moment has six distinct entries (xx yy zz xy xz yz), kept as scalars and
   // summed per tet in the order of s s^T + r0 r0^T + ... + r3 r3^T, then scaled by v / 20.
   double volume = 0;
-  double fx = 0, fy = 0, fz = 0;   // integral of r dV
+  Vec3 first = Vec3::Zero();       // integral of r dV
   std::array<double, 6> second{};  // integral of r r^T dV: xx yy zz xy xz yz
   const Vec3* pos = mesh.positions.data();
   for (const TetIndices& t : mesh.tets) {
@@ -22,10 +22,7 @@ MassProperties mass_properties(const TetMesh& mesh, double density) {
     const double v = signed_volume(r0, r1, r2, r3);
     const Vec3 s = r0 + r1 + r2 + r3;
     volume += v;
-    const double w = v / 4.0;
-    fx += w * s.x();
-    fy += w * s.y();
-    fz += w * s.z();
+    first += v / 4.0 * s;
     const double w20 = v / 20.0;
     // Entry (a, b) of s s^T + r0 r0^T + r1 r1^T + r2 r2^T + r3 r3^T, summed in that order.
     const auto entry = [&](int a, int b) {
@@ -43,7 +40,6 @@ MassProperties mass_properties(const TetMesh& mesh, double density) {
     second[4] += w20 * entry(0, 2);
     second[5] += w20 * entry(1, 2);
   }
-  const Vec3 first(fx, fy, fz);
   Mat3 second_moment;
   second_moment << second[0], second[3], second[4], second[3], second[1], second[5], second[4], second[5], second[2];
   m.volume = volume;

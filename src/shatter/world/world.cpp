@@ -348,7 +348,8 @@ Result<std::shared_ptr<const World::Shape>> World::inherit_shape(const Shape& pa
   std::vector<const ConvexHull*> moved(clusters.size(), nullptr);
   const std::vector<Index>& unchanged = child.unchanged_parent_tet;
   std::vector<char> taken(static_cast<std::size_t>(parent_tets), 0);
-  for (std::size_t c = 0; c < clusters.size() && unchanged.size() == parent_tet.size(); ++c) {
+  const std::size_t kept_candidates = unchanged.size() == parent_tet.size() ? clusters.size() : 0;
+  for (std::size_t c = 0; c < kept_candidates; ++c) {
     const Index p = slot_piece[c];
     if (clusters[c].size() != parent.piece_tets[p].size()) continue;
     bool same = true;
