@@ -20,6 +20,8 @@ struct FemModel;
 using AnchorMask = std::uint8_t;
 inline constexpr AnchorMask anchor_none = 0;  ///< no component held
 inline constexpr AnchorMask anchor_all = 7;   ///< all three components held
+/// Whether component c (0 = x, 1 = y, 2 = z) is held in mask m.
+constexpr bool held(AnchorMask m, int c) { return (m & (1u << c)) != 0; }
 
 /// Symmetric stiffness over the DOFs of the *active* nodes: nodes that belong to a tet and have at
 /// least one free component. DOF 3a + c is component c of active node a. Fully held nodes and

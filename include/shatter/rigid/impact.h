@@ -94,8 +94,9 @@ struct ImpactSettings {
   /// The static solve. Its PCG warm start is off by default, so that an event's outcome depends
   /// only on the body and its contacts, not on the solver's history (replays and restored
   /// snapshots give the same bits); the pattern and symbolic analysis are reused either way.
-  /// Newton iterations and load halvings are capped (12 and 3) to bound an impact's time: a solve
-  /// that does not converge goes on with the fraction of the load it reached.
+  /// Newton iterations per load step, load halvings and Newton iterations in all are capped (12, 3
+  /// and 60) to bound an impact's time: a solve that does not converge goes on with the fraction
+  /// of the load it reached.
   StaticSolverOptions solver = default_impact_solver_options();
   /// Children lighter than this fraction of the parent's mass, or than min_fragment_mass (kg), are
   /// removed as debris (their mass is reported), and at most max_fragments children are kept, the

@@ -3,11 +3,13 @@
 // a sparse LDL^T factorization whose symbolic analysis is reused while the pattern stays the same.
 #pragma once
 
+#include <Eigen/Cholesky>
 #include <Eigen/SparseCholesky>
 
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "shatter/core/error.h"
@@ -21,10 +23,17 @@ enum class LinearSolverKind {
   pcg_block_jacobi,        ///< CG preconditioned by the inverse 3x3 diagonal blocks
   pcg_block_gauss_seidel,  ///< CG preconditioned by one forward + one backward block Gauss-Seidel
                            ///< sweep (M = (D+L) D^-1 (D+U): symmetric positive definite)
+  /// CG preconditioned by a two-level cycle: a forward block Gauss-Seidel sweep, a coarse
+  /// correction in the rigid motions (3 translations, 3 rotations) of node aggregates, and a
+  /// backward sweep. The sweeps remove the short-wavelength error, the coarse space the long
+  /// one that they barely touch: the bending and drift of a body held at a few nodes (inertia
+  /// relief) took Gauss-Seidel hundreds of iterations. Needs the node positions
+  /// (LinearSolver::set_node_positions); without them the aggregates move only (no rotations).
+  pcg_two_level,
 };
-/// "direct", "pcg-jacobi" or "pcg-gauss-seidel".
+/// "direct", "pcg-jacobi", "pcg-gauss-seidel" or "pcg-two-level".
 const char* to_string(LinearSolverKind kind);
-/// "direct", "pcg-jacobi", "pcg-gauss-seidel" (as written by to_string).
+/// "direct", "pcg-jacobi", "pcg-gauss-seidel", "pcg-two-level" (as written by to_string).
 Result<LinearSolverKind> parse_linear_solver_kind(std::string_view name);
 
 /// Settings of a LinearSolver.
@@ -47,6 +56,11 @@ struct LinearSolverOptions {
   /// Newton's matrices change little from one iteration to the next, and an impact's static solve
   /// refactored on every one.
   bool reuse_factorization = false;
+  /// pcg_two_level: at most this many aggregates (the coarse system, 6 unknowns per aggregate, is
+  /// factorized densely once per solve), each of at least min_aggregate_nodes nodes where the
+  /// matrix has that many.
+  int max_aggregates = 48;
+  int min_aggregate_nodes = 32;
 };
 
 /// How one linear solve went.
@@ -111,6 +125,14 @@ class LinearSolver {
     reuse_skip_ = 0;
   }
 
+  /// Positions of the matrix's nodes (all of them, indexed like BlockSparseMatrix::num_nodes, m):
+  /// the rigid motions of pcg_two_level's aggregates turn about them. Set them once per problem
+  /// (the rest or current shape: the coarse space need only approximate the soft motions).
+  void set_node_positions(std::vector<Vec3> positions) {
+    node_positions_ = std::move(positions);
+    aggregates_pattern_ = 0;
+  }
+
   /// Symbolic analyses done so far (the direct solver does one per new pattern).
   [[nodiscard]] int symbolic_analyses() const { return symbolic_analyses_; }
 
@@ -118,7 +140,14 @@ class LinearSolver {
   LinearSolveReport solve_direct(const BlockSparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x);
   LinearSolveReport solve_pcg(const BlockSparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x);
   bool invert_diagonal_blocks(const BlockSparseMatrix& a, std::string& message);
-  void apply_preconditioner(const BlockSparseMatrix& a, const Eigen::VectorXd& r, Eigen::VectorXd& z) const;
+  void apply_preconditioner(const BlockSparseMatrix& a, const Eigen::VectorXd& r, Eigen::VectorXd& z);
+  /// pcg_two_level: the aggregates of a's pattern (kept while the pattern and positions are), then
+  /// the coarse matrix P^T A P of these values, factorized.
+  void prepare_two_level(const BlockSparseMatrix& a);
+  /// z = (D+L)^-1 r (forward block Gauss-Seidel sweep from zero).
+  void forward_sweep(const BlockSparseMatrix& a, const Eigen::VectorXd& r, Eigen::VectorXd& z) const;
+  /// z = (D+U)^-1 r (backward sweep from zero).
+  void backward_sweep(const BlockSparseMatrix& a, const Eigen::VectorXd& r, Eigen::VectorXd& z) const;
 
   LinearSolverOptions options_;
   void analyze(const BlockSparseMatrix& a, LinearSolveReport* report);
@@ -148,6 +177,19 @@ class LinearSolver {
   int symbolic_analyses_ = 0;
   std::vector<Mat3> diagonal_inverse_;  ///< inverse diagonal blocks (#active)
   Eigen::VectorXd r_, z_, p_, q_;
+  // pcg_two_level.
+  std::vector<Vec3> node_positions_;      ///< set_node_positions (#nodes), or empty
+  std::uint64_t aggregates_pattern_ = 0;  ///< pattern the aggregates below belong to (0: none)
+  std::vector<Index> aggregate_of_;       ///< per active node
+  /// Per active node, its offset from its aggregate's centre divided by the aggregate's radius
+  /// (so that rotation and translation unknowns are of one scale).
+  std::vector<Vec3> aggregate_offset_;
+  std::vector<Vec3> free_component_;  ///< per active node: 1 for a free component, 0 for a held one
+  Index num_aggregates_ = 0;
+  int modes_ = 6;                       ///< unknowns per aggregate: 6, or 3 without positions
+  Eigen::LLT<Eigen::MatrixXd> coarse_;  ///< P^T A P, factorized
+  bool coarse_ok_ = false;              ///< it is positive definite (else: sweeps only)
+  Eigen::VectorXd coarse_rhs_, sweep_, q_two_;
 };
 
 }  // namespace shatter

@@ -56,6 +56,10 @@ inline constexpr int kHardLoadStep = 10;
 /// PCG iterations of one Newton step from which StaticSolverOptions::direct_when_cheaper weighs a
 /// factorization.
 inline constexpr int kMinIterationsForDirect = 50;
+/// PCG iterations with the two-level preconditioner that StaticSolverOptions::direct_when_cheaper
+/// expects per Newton step (measured: 13-26 on the cinder blocks' impact systems, held far away or
+/// by inertia relief).
+inline constexpr int kTwoLevelIterations = 30;
 
 /// Settings of the Newton solver.
 struct StaticSolverOptions {
@@ -88,6 +92,11 @@ struct StaticSolverOptions {
   /// A load step that fails (energy cannot decrease, non-finite values, no convergence) is
   /// retried at half the size, at most this many times in the whole solve.
   int max_load_halvings = 8;
+  /// Newton iterations over the whole solve, all load steps together (0: no limit). When they run
+  /// out the solve ends at the last load fraction in equilibrium, as when the halvings do: a bound
+  /// on the time of a solve whose load steps each converge, but slowly (a large deformation met
+  /// in many small load steps).
+  int max_total_newton_iterations = 0;
   /// Load steps before the last need only this relative residual: they only give the next step
   /// its start, and Newton's quadratic convergence at the last step makes up for it in one or two
   /// iterations. Never tighter than relative_residual_tolerance.
@@ -95,9 +104,10 @@ struct StaticSolverOptions {
   /// Keep one record per Newton iteration in StaticReport::history.
   bool record_history = true;
   /// With an iterative linear solver: when a Newton step's PCG took at least
-  /// kMinIterationsForDirect iterations, compare its cost with a factorization's (from the symbolic
-  /// analysis: multiply-adds, deterministic) and use the direct solver for the rest of the solves
-  /// on this pattern when that is cheaper (slender parts, soft materials: ill-conditioned systems).
+  /// kMinIterationsForDirect iterations (an ill-conditioned system: slender parts, soft materials,
+  /// a body held at a few nodes), weigh going on against a factorization (its cost from the
+  /// symbolic analysis) and against PCG with the two-level preconditioner (pcg_two_level), by
+  /// multiply-adds (deterministic), and use the cheapest for the rest of the solves on this pattern.
   bool direct_when_cheaper = true;
   /// PCG: the first Newton step of a load step starts from the previous first step d, scaled by
   /// (r.d)/(d.K d) (the energy-norm optimal multiple: never a worse start than zero). Repeated
@@ -236,6 +246,7 @@ class StaticSolver {
   Eigen::VectorXd first_step_;           ///< first Newton step of the last load step (#DOFs)
   bool direct_checked_ = false;          ///< direct_when_cheaper weighed the factorization for this pattern
   bool prefer_direct_ = false;           ///< ... and found it cheaper than PCG
+  bool prefer_two_level_ = false;        ///< ... or found PCG with the two-level preconditioner cheapest
 };
 
 /// One-off solve (builds a StaticSolver).

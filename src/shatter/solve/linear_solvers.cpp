@@ -22,16 +22,17 @@ const char* to_string(LinearSolverKind kind) {
     case LinearSolverKind::direct_ldlt: return "direct";
     case LinearSolverKind::pcg_block_jacobi: return "pcg-jacobi";
     case LinearSolverKind::pcg_block_gauss_seidel: return "pcg-gauss-seidel";
+    case LinearSolverKind::pcg_two_level: return "pcg-two-level";
   }
   return "?";
 }
 
 Result<LinearSolverKind> parse_linear_solver_kind(std::string_view name) {
-  for (LinearSolverKind k :
-       {LinearSolverKind::direct_ldlt, LinearSolverKind::pcg_block_jacobi, LinearSolverKind::pcg_block_gauss_seidel})
+  for (LinearSolverKind k : {LinearSolverKind::direct_ldlt, LinearSolverKind::pcg_block_jacobi,
+                             LinearSolverKind::pcg_block_gauss_seidel, LinearSolverKind::pcg_two_level})
     if (name == to_string(k)) return k;
   return field_error("linear_solver", "unknown linear solver '" + std::string(name) +
-                                          "'; expected direct, pcg-jacobi or pcg-gauss-seidel");
+                                          "'; expected direct, pcg-jacobi, pcg-gauss-seidel or pcg-two-level");
 }
 
 LinearSolveReport LinearSolver::solve(const BlockSparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
@@ -199,8 +200,158 @@ bool LinearSolver::invert_diagonal_blocks(const BlockSparseMatrix& a, std::strin
   return true;
 }
 
-void LinearSolver::apply_preconditioner(const BlockSparseMatrix& a, const Eigen::VectorXd& r,
-                                        Eigen::VectorXd& z) const {
+namespace {
+
+// Sum over the blocks k in [k_begin, k_end) of block row i of A: A_ik z_col(k).
+Vec3 row_product(const BlockSparseMatrix& a, const Eigen::VectorXd& z, Index i, Index k_begin, Index k_end) {
+  const std::vector<Index>& ptr = a.block_ptr();
+  const std::vector<Index>& col = a.block_col();
+  const Index p0 = ptr[i];
+  const Index stride = 3 * (ptr[i + 1] - p0);
+  Vec3 s;
+  for (int row = 0; row < 3; ++row) {
+    const double* vr = a.values() + 9 * p0 + row * stride;
+    double acc = 0;
+    for (Index k = k_begin; k < k_end; ++k) {
+      const double* blk = vr + 3 * (k - p0);
+      const Index c = 3 * col[k];
+      acc += blk[0] * z[c] + blk[1] * z[c + 1] + blk[2] * z[c + 2];
+    }
+    s[row] = acc;
+  }
+  return s;
+}
+
+// [d]x: the matrix of the cross product d x (.).
+Mat3 cross_matrix(const Vec3& d) {
+  Mat3 m;
+  m << 0, -d.z(), d.y(), d.z(), 0, -d.x(), -d.y(), d.x(), 0;
+  return m;
+}
+
+}  // namespace
+
+void LinearSolver::forward_sweep(const BlockSparseMatrix& a, const Eigen::VectorXd& r, Eigen::VectorXd& z) const {
+  z.resize(a.size());
+  const std::vector<Index>& ptr = a.block_ptr();
+  for (Index i = 0; i < a.num_active(); ++i) {
+    const Vec3 s = r.segment<3>(3 * i) - row_product(a, z, i, ptr[i], a.diagonal_block(i));
+    z.segment<3>(3 * i) = diagonal_inverse_[i] * s;
+  }
+}
+
+void LinearSolver::backward_sweep(const BlockSparseMatrix& a, const Eigen::VectorXd& r, Eigen::VectorXd& z) const {
+  z.resize(a.size());
+  const std::vector<Index>& ptr = a.block_ptr();
+  for (Index i = a.num_active() - 1; i >= 0; --i) {
+    const Vec3 s = r.segment<3>(3 * i) - row_product(a, z, i, a.diagonal_block(i) + 1, ptr[i + 1]);
+    z.segment<3>(3 * i) = diagonal_inverse_[i] * s;
+  }
+}
+
+void LinearSolver::prepare_two_level(const BlockSparseMatrix& a) {
+  const Index na = a.num_active();
+  const std::vector<Index>& ptr = a.block_ptr();
+  const std::vector<Index>& col = a.block_col();
+  if (aggregates_pattern_ != a.pattern_id()) {
+    // Aggregates grown breadth-first over the matrix graph from the lowest unassigned node, each
+    // to `size` nodes (connected pieces of the body, in a fixed order). A piece that ran out of
+    // unassigned neighbours below a quarter of that joins the aggregate of a neighbour.
+    const Index size =
+        std::max<Index>(std::max(1, options_.min_aggregate_nodes),
+                        (na + std::max(1, options_.max_aggregates) - 1) / std::max(1, options_.max_aggregates));
+    aggregate_of_.assign(static_cast<std::size_t>(na), -1);
+    std::vector<Index> queue;
+    std::vector<Index> members;
+    Index count = 0;
+    for (Index seed = 0; seed < na; ++seed) {
+      if (aggregate_of_[seed] >= 0) continue;
+      queue.assign(1, seed);
+      aggregate_of_[seed] = count;
+      for (std::size_t head = 0; head < queue.size() && static_cast<Index>(queue.size()) < size; ++head)
+        for (Index k = ptr[queue[head]]; k < ptr[queue[head] + 1] && static_cast<Index>(queue.size()) < size; ++k)
+          if (aggregate_of_[col[k]] < 0) {
+            aggregate_of_[col[k]] = count;
+            queue.push_back(col[k]);
+          }
+      Index join = -1;
+      if (4 * static_cast<Index>(queue.size()) < size)
+        for (std::size_t q = 0; q < queue.size() && join < 0; ++q)
+          for (Index k = ptr[queue[q]]; k < ptr[queue[q] + 1]; ++k)
+            if (aggregate_of_[col[k]] >= 0 && aggregate_of_[col[k]] != count) {
+              join = aggregate_of_[col[k]];
+              break;
+            }
+      if (join >= 0) {
+        for (Index v : queue) aggregate_of_[v] = join;
+      } else {
+        ++count;
+      }
+    }
+    num_aggregates_ = count;
+    // Offsets from each aggregate's centre, in units of its radius.
+    const bool have_positions = static_cast<Index>(node_positions_.size()) == a.num_nodes();
+    modes_ = have_positions ? 6 : 3;
+    aggregate_offset_.assign(static_cast<std::size_t>(na), Vec3::Zero());
+    if (have_positions) {
+      std::vector<Vec3> centre(static_cast<std::size_t>(count), Vec3::Zero());
+      std::vector<double> nodes(static_cast<std::size_t>(count), 0.0), radius2(static_cast<std::size_t>(count), 0.0);
+      for (Index i = 0; i < na; ++i) {
+        centre[aggregate_of_[i]] += node_positions_[a.node_of_active()[i]];
+        nodes[aggregate_of_[i]] += 1;
+      }
+      for (Index g = 0; g < count; ++g) centre[g] /= nodes[g];
+      for (Index i = 0; i < na; ++i) {
+        aggregate_offset_[i] = node_positions_[a.node_of_active()[i]] - centre[aggregate_of_[i]];
+        radius2[aggregate_of_[i]] += aggregate_offset_[i].squaredNorm();
+      }
+      for (Index i = 0; i < na; ++i) {
+        // An aggregate of fewer than four nodes (a small piece of the graph on its own) only
+        // moves: its rotations may be degenerate. Its zero rotation unknowns are set apart below.
+        const double r2 = radius2[aggregate_of_[i]] / nodes[aggregate_of_[i]];
+        aggregate_offset_[i] =
+            r2 > 0 && nodes[aggregate_of_[i]] >= 4 ? Vec3(aggregate_offset_[i] / std::sqrt(r2)) : Vec3::Zero();
+      }
+    }
+    // A held component of a partly held node stays 0: the coarse motions leave it out.
+    free_component_.resize(static_cast<std::size_t>(na));
+    for (Index i = 0; i < na; ++i)
+      for (int c = 0; c < 3; ++c) free_component_[i][c] = held(a.anchors()[a.node_of_active()[i]], c) ? 0.0 : 1.0;
+    aggregates_pattern_ = a.pattern_id();
+  }
+  // P^T A P. Node i of aggregate g moves by P_i e_g = t - [d_i]x w for the aggregate's translation
+  // t and rotation w (d_i its scaled offset), so block (g, h) gathers P_i^T A_ij P_j.
+  const Index nc = modes_ * num_aggregates_;
+  Eigen::MatrixXd coarse = Eigen::MatrixXd::Zero(nc, nc);
+  using Mat36 = Eigen::Matrix<double, 3, 6>;
+  auto prolongation = [&](Index i) {
+    Mat36 p;
+    p.leftCols<3>().setIdentity();
+    p.rightCols<3>() = -cross_matrix(aggregate_offset_[i]);
+    return Mat36(free_component_[i].asDiagonal() * p);
+  };
+  for (Index i = 0; i < na; ++i) {
+    const Index g = aggregate_of_[i];
+    const Mat36 pi = prolongation(i);
+    for (Index k = ptr[i]; k < ptr[i + 1]; ++k) {
+      const Index j = col[k];
+      const Mat3 aij = a.block(i, k);
+      if (modes_ == 3) {
+        coarse.block<3, 3>(3 * g, 3 * aggregate_of_[j]) +=
+            free_component_[i].asDiagonal() * aij * free_component_[j].asDiagonal();
+      } else {
+        const Mat36 apj = aij * prolongation(j);
+        coarse.block<6, 6>(6 * g, 6 * aggregate_of_[j]).noalias() += pi.transpose() * apj;
+      }
+    }
+  }
+  for (Index c = 0; c < nc; ++c)
+    if (coarse(c, c) == 0.0) coarse(c, c) = 1.0;  // an unknown no node moves with: solved as 0
+  coarse_.compute(coarse);
+  coarse_ok_ = coarse_.info() == Eigen::Success;
+}
+
+void LinearSolver::apply_preconditioner(const BlockSparseMatrix& a, const Eigen::VectorXd& r, Eigen::VectorXd& z) {
   const Index na = a.num_active();
   z.resize(a.size());
   if (options_.kind == LinearSolverKind::pcg_block_jacobi) {
@@ -209,36 +360,40 @@ void LinearSolver::apply_preconditioner(const BlockSparseMatrix& a, const Eigen:
         16384);  // ~0.01 us per block, once per PCG iteration
     return;
   }
+  if (options_.kind == LinearSolverKind::pcg_two_level && coarse_ok_) {
+    // z = B r for the two-level cycle: a forward sweep, the coarse correction of what it left,
+    // a backward sweep. With the sweeps each other's transposes and an exact coarse solve, B is
+    // symmetric positive definite, as CG needs.
+    forward_sweep(a, r, z);
+    a.multiply(z, sweep_);
+    sweep_ = r - sweep_;
+    coarse_rhs_.setZero(modes_ * num_aggregates_);
+    for (Index i = 0; i < na; ++i) {
+      const Index g = aggregate_of_[i];
+      const Vec3 t = free_component_[i].cwiseProduct(sweep_.segment<3>(3 * i));
+      coarse_rhs_.segment<3>(modes_ * g) += t;
+      if (modes_ == 6) coarse_rhs_.segment<3>(6 * g + 3) += aggregate_offset_[i].cross(t);
+    }
+    coarse_.solveInPlace(coarse_rhs_);
+    for (Index i = 0; i < na; ++i) {
+      const Index g = aggregate_of_[i];
+      Vec3 move = coarse_rhs_.segment<3>(modes_ * g);
+      if (modes_ == 6) move -= aggregate_offset_[i].cross(coarse_rhs_.segment<3>(6 * g + 3));
+      z.segment<3>(3 * i) += free_component_[i].cwiseProduct(move);
+    }
+    a.multiply(z, sweep_);
+    sweep_ = r - sweep_;
+    backward_sweep(a, sweep_, q_two_);
+    z += q_two_;
+    return;
+  }
   // Symmetric block Gauss-Seidel, z = M^-1 r with M = (D+L) D^-1 (D+U) (the paper's §3.3):
   // forward sweep (D+L) y = r, then backward sweep (D+U) z = D y.
+  forward_sweep(a, r, z);
   const std::vector<Index>& ptr = a.block_ptr();
-  const std::vector<Index>& col = a.block_col();
-  const double* v = a.values();
-  auto row_product = [&](Index i, Index k_begin, Index k_end) {
-    // sum over blocks k in [k_begin, k_end) of row i: A_ik z_col(k)
-    Vec3 s = Vec3::Zero();
-    const Index p0 = ptr[i];
-    const Index stride = 3 * (ptr[i + 1] - p0);
-    for (int row = 0; row < 3; ++row) {
-      const double* vr = v + 9 * p0 + row * stride;
-      double acc = 0;
-      for (Index k = k_begin; k < k_end; ++k) {
-        const double* blk = vr + 3 * (k - p0);
-        const Index c = 3 * col[k];
-        acc += blk[0] * z[c] + blk[1] * z[c + 1] + blk[2] * z[c + 2];
-      }
-      s[row] = acc;
-    }
-    return s;
-  };
-  for (Index i = 0; i < na; ++i) {
-    const Index d = a.diagonal_block(i);
-    const Vec3 s = r.segment<3>(3 * i) - row_product(i, ptr[i], d);
-    z.segment<3>(3 * i) = diagonal_inverse_[i] * s;
-  }
   for (Index i = na - 1; i >= 0; --i) {
     const Index d = a.diagonal_block(i);
-    const Vec3 s = row_product(i, d + 1, ptr[i + 1]);
+    const Vec3 s = row_product(a, z, i, d + 1, ptr[i + 1]);
     z.segment<3>(3 * i) -= diagonal_inverse_[i] * s;
   }
 }
@@ -250,6 +405,7 @@ LinearSolveReport LinearSolver::solve_pcg(const BlockSparseMatrix& a, const Eige
     report.indefinite = true;
     return report;
   }
+  if (options_.kind == LinearSolverKind::pcg_two_level) prepare_two_level(a);
   const double b_norm = b.norm();
   if (!options_.warm_start || x.size() != a.size() || !all_finite(x)) x.setZero(a.size());
   // r = b - A x

@@ -29,8 +29,6 @@ Mat34 corners(const FemModel& model, const std::vector<Vec3>& x, Index e) {
   return xe;
 }
 
-bool held(AnchorMask m, int c) { return (m & (1u << c)) != 0; }
-
 // Smallest loops that go parallel (see parallel_for): about half a millisecond of work. An impact
 // solve of a few thousand tets then runs without a single parallel region, so it cannot stall
 // when the cores are oversubscribed.
@@ -78,6 +76,7 @@ void StaticSolver::update_pattern(const FemModel& model, const std::vector<Ancho
   first_step_.resize(0);
   direct_checked_ = false;
   prefer_direct_ = false;
+  prefer_two_level_ = false;
   pattern_tets_ = model.tets;
   pattern_anchors_ = anchors;
   has_pattern_ = true;
@@ -174,8 +173,9 @@ struct StaticSolver::SolveState {
   double round_off = 0;             ///< estimated round-off in ||r|| at the last residual evaluation, N
   double energy = std::numeric_limits<double>::quiet_NaN();  ///< U(x) of the active tets, J (NaN: not yet known)
   std::vector<Vec3> x_trial;                                 ///< line-search trial positions, m (#nodes)
-  double step_length = 0;    ///< the last line search's accepted fraction of the step (0: none)
-  bool last_direct = false;  ///< the last linear solve was the direct one
+  double step_length = 0;          ///< the last line search's accepted fraction of the step (0: none)
+  bool last_direct = false;        ///< the last linear solve was the direct one
+  bool out_of_iterations = false;  ///< StaticSolverOptions::max_total_newton_iterations ran out
   StaticReport report;
 };
 
@@ -215,6 +215,7 @@ Result<StaticReport> StaticSolver::solve(const FemModel& model, const StaticProb
   if (std::optional<Outcome> early = prepare(st)) return st.finish(std::move(*early));
   // A factorization is reused within a solve only: the result depends on this solve's input alone.
   linear_.forget_factorization();
+  linear_.set_node_positions(x);
 
   // Load stepping (automatic increments, as CalculiX's): easy steps let the next one grow, hard
   // ones make it shrink, and a failed step restarts from the last equilibrium at half the size.
@@ -241,7 +242,7 @@ Result<StaticReport> StaticSolver::solve(const FemModel& model, const StaticProb
       continue;
     }
     x = x_good;
-    if (halvings >= options_.max_load_halvings) {
+    if (halvings >= options_.max_load_halvings || st.out_of_iterations) {
       failure = std::move(why);
       break;
     }
@@ -382,6 +383,13 @@ StaticSolver::Outcome StaticSolver::newton_load_step(SolveState& st, double s, d
     if (it == options_.max_newton_iterations)
       return {SolveStatus::no_convergence, "no convergence in " + std::to_string(it) +
                                                " Newton iterations (relative residual " + format_number(rel, 3) + ")"};
+    if (options_.max_total_newton_iterations > 0 &&
+        st.report.newton_iterations >= options_.max_total_newton_iterations) {
+      st.out_of_iterations = true;
+      return {SolveStatus::no_convergence, "the solve's " + std::to_string(options_.max_total_newton_iterations) +
+                                               " Newton iterations ran out (relative residual " +
+                                               format_number(rel, 3) + ")"};
+    }
     previous_rel = rel;
     if (Outcome step = newton_iteration(st, s, it, rel); !step.ok()) return step;
   }
@@ -442,6 +450,7 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
   // Once chosen, the direct solver keeps its factorization while CG preconditioned by it converges
   // quickly (LinearSolverOptions::reuse_factorization).
   if (prefer_direct_) linear.kind = LinearSolverKind::direct_ldlt;
+  if (prefer_two_level_) linear.kind = LinearSolverKind::pcg_two_level;
   linear.reuse_factorization = prefer_direct_;
   linear.relative_tolerance =
       std::max(linear.relative_tolerance,
@@ -457,12 +466,17 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
     }
   }
   // direct_when_cheaper: PCG gets kMinIterationsForDirect iterations first. A system it cannot
-  // solve in those is ill-conditioned; then a factorization is weighed against that many more PCG
-  // iterations (its cost from the symbolic analysis, deterministic): one PCG iteration is a
-  // matrix-vector product, two Gauss-Seidel (or one Jacobi) sweeps over the stored values and a few
-  // vector updates; a factorization costs its multiply-adds (counted twice: a simplicial
-  // factorization streams memory less well) and two triangular solves. The direct solver then
-  // solves this step and the rest of the solves on this pattern; else PCG goes on from where it is.
+  // solve in those is ill-conditioned (a body held at a few nodes, a slender or soft part); then
+  // three ways on are weighed, by multiply-adds (deterministic, unlike times), and the cheapest
+  // solves this step and the rest of the solves on this pattern:
+  //  - more PCG iterations, as many as the rate of the first ones predicts: each a matrix-vector
+  //    product, two Gauss-Seidel (or one Jacobi) sweeps over the stored values and a few vector
+  //    updates;
+  //  - a factorization: its multiply-adds (counted twice: a simplicial factorization streams
+  //    memory less well) and two triangular solves;
+  //  - PCG with the two-level preconditioner (pcg_two_level), which removes what the sweeps leave
+  //    at long wavelengths: per solve the coarse matrix and its factorization, then about
+  //    kTwoLevelIterations iterations of twice a Gauss-Seidel iteration's work.
   const int max_pcg = linear.max_iterations;
   const bool weigh = pcg && options_.direct_when_cheaper && !direct_checked_ && max_pcg > kMinIterationsForDirect;
   if (weigh) linear.max_iterations = kMinIterationsForDirect;
@@ -480,14 +494,25 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
     const double remaining = std::min(
         static_cast<double>(max_pcg - kMinIterationsForDirect),
         kMinIterationsForDirect * std::max(1.0, std::log(linear.relative_tolerance) / std::log(reached) - 1.0));
-    const double pcg_cost = remaining * (4.0 * matrix_.num_values() + 10.0 * matrix_.size());
-    prefer_direct_ = 2.0 * direct.factor_flops + 4.0 * direct.factor_nonzeros < pcg_cost;
+    const double values = static_cast<double>(matrix_.num_values());
+    const double unknowns = static_cast<double>(matrix_.size());
+    const double pcg_cost = remaining * (4.0 * values + 10.0 * unknowns);
+    const double direct_cost = 2.0 * direct.factor_flops + 4.0 * direct.factor_nonzeros;
+    const double aggregates =
+        std::clamp(std::floor(static_cast<double>(matrix_.num_active()) / std::max(1, linear.min_aggregate_nodes)), 1.0,
+                   static_cast<double>(std::max(1, linear.max_aggregates)));
+    const double coarse = 6.0 * aggregates;
+    const double two_level_cost = 36.0 * values + coarse * coarse * coarse / 3.0 +
+                                  kTwoLevelIterations * (8.0 * values + 20.0 * unknowns + 2.0 * coarse * coarse);
+    prefer_direct_ = direct_cost < std::min(pcg_cost, two_level_cost);
+    prefer_two_level_ = !prefer_direct_ && two_level_cost < pcg_cost;
     st.report.linear_solve_ms += lin.time_ms;
     st.report.linear_iterations_total += lin.iterations;
     if (prefer_direct_) {
       linear.kind = LinearSolverKind::direct_ldlt;
       pcg = false;
     } else {
+      if (prefer_two_level_) linear.kind = LinearSolverKind::pcg_two_level;
       linear.max_iterations = max_pcg - lin.iterations;
       linear.warm_start = true;
     }
