@@ -133,14 +133,22 @@ void BM_Impact40k(benchmark::State& state) {
       .point = Vec3(0, -0.05, 0), .normal = Vec3::UnitY(), .normal_impulse = 60, .approach_speed = 10};
   double solve = 0, fracture = 0;
   std::size_t children = 0;
+  StaticReport report;
   for (auto _ : state) {
     auto r = analyze_impact(bar, body, std::span(&blow, 1));
     solve = r->solve_ms;
     fracture = r->fracture_ms;
     children = r->children.size();
+    report = r->solve;
   }
   state.counters["tets"] = static_cast<double>(bar.mesh.num_tets());
   state.counters["solve_ms"] = solve;
+  // The solve's Newton iterations, PCG iterations (all of them) and direct solves, and its time in
+  // linear solves.
+  state.counters["newton"] = report.newton_iterations;
+  state.counters["pcg"] = report.linear_iterations_total;
+  state.counters["direct"] = report.direct_iterations;
+  state.counters["linear_ms"] = report.linear_solve_ms;
   state.counters["fracture_ms"] = fracture;
   state.counters["children"] = static_cast<double>(children);
 }

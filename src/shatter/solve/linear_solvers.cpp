@@ -319,30 +319,26 @@ void LinearSolver::prepare_two_level(const BlockSparseMatrix& a) {
       for (int c = 0; c < 3; ++c) free_component_[i][c] = held(a.anchors()[a.node_of_active()[i]], c) ? 0.0 : 1.0;
     aggregates_pattern_ = a.pattern_id();
   }
-  // P^T A P. Node i of aggregate g moves by P_i e_g = t - [d_i]x w for the aggregate's translation
-  // t and rotation w (d_i its scaled offset), so block (g, h) gathers P_i^T A_ij P_j.
+  // P^T A P. Node i of aggregate g moves by P_i e_g = F_i (t - S_i w) for the aggregate's
+  // translation t and rotation w, with S_i = [d_i]x (d_i the node's scaled offset) and F_i the
+  // diagonal of its free components. With B = F_i A_ij F_j, block (g, h) gathers
+  // P_i^T A_ij P_j = [B, -B S_j; S_i B, -S_i B S_j] (S_i^T = -S_i).
   const Index nc = modes_ * num_aggregates_;
   Eigen::MatrixXd coarse = Eigen::MatrixXd::Zero(nc, nc);
-  using Mat36 = Eigen::Matrix<double, 3, 6>;
-  auto prolongation = [&](Index i) {
-    Mat36 p;
-    p.leftCols<3>().setIdentity();
-    p.rightCols<3>() = -cross_matrix(aggregate_offset_[i]);
-    return Mat36(free_component_[i].asDiagonal() * p);
-  };
   for (Index i = 0; i < na; ++i) {
     const Index g = aggregate_of_[i];
-    const Mat36 pi = prolongation(i);
+    const Mat3 si = cross_matrix(aggregate_offset_[i]);
     for (Index k = ptr[i]; k < ptr[i + 1]; ++k) {
       const Index j = col[k];
-      const Mat3 aij = a.block(i, k);
-      if (modes_ == 3) {
-        coarse.block<3, 3>(3 * g, 3 * aggregate_of_[j]) +=
-            free_component_[i].asDiagonal() * aij * free_component_[j].asDiagonal();
-      } else {
-        const Mat36 apj = aij * prolongation(j);
-        coarse.block<6, 6>(6 * g, 6 * aggregate_of_[j]).noalias() += pi.transpose() * apj;
-      }
+      const Index h = aggregate_of_[j];
+      const Mat3 b = free_component_[i].asDiagonal() * a.block(i, k) * free_component_[j].asDiagonal();
+      coarse.block<3, 3>(modes_ * g, modes_ * h) += b;
+      if (modes_ == 3) continue;
+      const Mat3 sj = cross_matrix(aggregate_offset_[j]);
+      const Mat3 bs = b * sj;
+      coarse.block<3, 3>(6 * g, 6 * h + 3) -= bs;
+      coarse.block<3, 3>(6 * g + 3, 6 * h) += si * b;
+      coarse.block<3, 3>(6 * g + 3, 6 * h + 3) -= si * bs;
     }
   }
   for (Index c = 0; c < nc; ++c)
