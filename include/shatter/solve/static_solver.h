@@ -247,6 +247,12 @@ class StaticSolver {
   bool direct_checked_ = false;          ///< direct_when_cheaper weighed the factorization for this pattern
   bool prefer_direct_ = false;           ///< ... and found it cheaper than PCG
   bool prefer_two_level_ = false;        ///< ... or found PCG with the two-level preconditioner cheapest
+  // The weighing's estimates, in multiply-adds: a factorization and solve, going on with PCG, the
+  // two-level preconditioner's set-up per solve and its cost per iteration.
+  double direct_cost_ = 0;
+  double pcg_cost_ = 0;
+  double two_level_setup_ = 0;
+  double two_level_iteration_ = 0;
 };
 
 /// One-off solve (builds a StaticSolver).

@@ -77,6 +77,7 @@ void StaticSolver::update_pattern(const FemModel& model, const std::vector<Ancho
   direct_checked_ = false;
   prefer_direct_ = false;
   prefer_two_level_ = false;
+  direct_cost_ = pcg_cost_ = two_level_setup_ = two_level_iteration_ = 0;
   pattern_tets_ = model.tets;
   pattern_anchors_ = anchors;
   has_pattern_ = true;
@@ -502,10 +503,14 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
         std::clamp(std::floor(static_cast<double>(matrix_.num_active()) / std::max(1, linear.min_aggregate_nodes)), 1.0,
                    static_cast<double>(std::max(1, linear.max_aggregates)));
     const double coarse = 6.0 * aggregates;
-    const double two_level_cost = 36.0 * values + coarse * coarse * coarse / 3.0 +
-                                  kTwoLevelIterations * (8.0 * values + 20.0 * unknowns + 2.0 * coarse * coarse);
+    two_level_setup_ = 12.0 * values + coarse * coarse * coarse / 3.0;
+    two_level_iteration_ = 8.0 * values + 20.0 * unknowns + 2.0 * coarse * coarse;
+    const double two_level_cost = two_level_setup_ + kTwoLevelIterations * two_level_iteration_;
     prefer_direct_ = direct_cost < std::min(pcg_cost, two_level_cost);
     prefer_two_level_ = !prefer_direct_ && two_level_cost < pcg_cost;
+    // What the two-level solves are held to (below).
+    direct_cost_ = direct_cost;
+    pcg_cost_ = pcg_cost;
     st.report.linear_solve_ms += lin.time_ms;
     st.report.linear_iterations_total += lin.iterations;
     if (prefer_direct_) {
@@ -518,6 +523,14 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
     }
     linear_.set_options(linear);
     lin = linear_.solve(matrix_, st.r, st.dx);
+  }
+  // The two-level PCG was chosen on an expected iteration count. A solve that took so many that
+  // it cost more than the runner-up (tight tolerances, a tangent near buckling: the soft
+  // cantilever took 200 per step) hands the rest of the solves on this pattern to that one.
+  if (prefer_two_level_ && linear.kind == LinearSolverKind::pcg_two_level &&
+      two_level_setup_ + lin.iterations * two_level_iteration_ > std::min(direct_cost_, pcg_cost_)) {
+    prefer_two_level_ = false;
+    prefer_direct_ = direct_cost_ < pcg_cost_;
   }
   indefinite = lin.indefinite;
   st.last_direct = !pcg;
