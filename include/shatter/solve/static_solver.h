@@ -97,6 +97,12 @@ struct StaticSolverOptions {
   /// on the time of a solve whose load steps each converge, but slowly (a large deformation met
   /// in many small load steps).
   int max_total_newton_iterations = 0;
+  /// End a load step early (as failed: it is retried at half the size) when, from the last four
+  /// iterations, the residual falls too slowly to meet the tolerance in twice the iterations left
+  /// (or does not fall), as CalculiX cuts an increment back on the predicted iterations. Off by
+  /// default; impact solves use it: their hard steps (a clay body crushed past what StVK carries)
+  /// otherwise spent their whole 12 iterations before failing.
+  bool abandon_slow_load_steps = false;
   /// Load steps before the last need only this relative residual: they only give the next step
   /// its start, and Newton's quadratic convergence at the last step makes up for it in one or two
   /// iterations. Never tighter than relative_residual_tolerance.

@@ -450,6 +450,7 @@ StaticSolverOptions default_impact_solver_options() {
   // ... and so is one whose load steps each converge, slowly (a thin flap of a fragment bending
   // far under the load took 174 iterations in as many as 14 load steps).
   o.max_total_newton_iterations = 60;
+  o.abandon_slow_load_steps = true;
   return o;
 }
 
