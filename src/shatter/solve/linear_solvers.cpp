@@ -1,6 +1,8 @@
 // PCG with block preconditioners and the reusable sparse LDL^T solver.
 #include "shatter/solve/linear_solvers.h"
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -301,16 +303,28 @@ void LinearSolver::prepare_two_level(const BlockSparseMatrix& a) {
         nodes[aggregate_of_[i]] += 1;
       }
       for (Index g = 0; g < count; ++g) centre[g] /= nodes[g];
+      std::vector<Mat3> scatter(static_cast<std::size_t>(count), Mat3::Zero());
       for (Index i = 0; i < na; ++i) {
-        aggregate_offset_[i] = node_positions_[a.node_of_active()[i]] - centre[aggregate_of_[i]];
-        radius2[aggregate_of_[i]] += aggregate_offset_[i].squaredNorm();
+        const Index g = aggregate_of_[i];
+        aggregate_offset_[i] = node_positions_[a.node_of_active()[i]] - centre[g];
+        radius2[g] += aggregate_offset_[i].squaredNorm();
+        scatter[g] += aggregate_offset_[i] * aggregate_offset_[i].transpose();
+      }
+      // An aggregate of fewer than four nodes (a small piece of the graph on its own), or of
+      // nodes on one line, only moves: a rotation about that line would move none of them, and
+      // a coarse matrix singular along it would amplify round-off. Its zero rotation unknowns are
+      // set apart below.
+      std::vector<char> rotates(static_cast<std::size_t>(count), 0);
+      for (Index g = 0; g < count; ++g) {
+        if (nodes[g] < 4 || !(radius2[g] > 0)) continue;
+        Eigen::SelfAdjointEigenSolver<Mat3> eig;
+        eig.computeDirect(scatter[g], Eigen::EigenvaluesOnly);
+        rotates[g] = eig.eigenvalues()[1] > 1e-6 * eig.eigenvalues()[2];
       }
       for (Index i = 0; i < na; ++i) {
-        // An aggregate of fewer than four nodes (a small piece of the graph on its own) only
-        // moves: its rotations may be degenerate. Its zero rotation unknowns are set apart below.
-        const double r2 = radius2[aggregate_of_[i]] / nodes[aggregate_of_[i]];
+        const Index g = aggregate_of_[i];
         aggregate_offset_[i] =
-            r2 > 0 && nodes[aggregate_of_[i]] >= 4 ? Vec3(aggregate_offset_[i] / std::sqrt(r2)) : Vec3::Zero();
+            rotates[g] ? Vec3(aggregate_offset_[i] / std::sqrt(radius2[g] / nodes[g])) : Vec3::Zero();
       }
     }
     // A held component of a partly held node stays 0: the coarse motions leave it out.
