@@ -334,6 +334,21 @@ TEST(LinearSolvers, TwoLevelSolvesAFloatingBarInFewIterations) {
   EXPECT_LT(iterations[1], iterations[0]);
   EXPECT_LT(iterations[0], iterations[2]);
 
+  // Any aggregate budget gives the solution, and is kept: pieces squeezed between aggregates are
+  // paired up with their neighbours (with 36, growth leaves 37 on this bar).
+  for (const int max_aggregates : {1, 2, 3, 7, 36, 100}) {
+    LinearSolver two_level(LinearSolverOptions{.kind = LinearSolverKind::pcg_two_level,
+                                               .relative_tolerance = 1e-10,
+                                               .max_aggregates = max_aggregates,
+                                               .min_aggregate_nodes = 1});
+    two_level.set_node_positions(mesh.positions);
+    Eigen::VectorXd x;
+    ASSERT_TRUE(two_level.solve(m, b, x).converged) << max_aggregates;
+    EXPECT_LE((x - exact).norm(), 1e-8 * exact.norm()) << max_aggregates;
+    EXPECT_GE(two_level.num_aggregates(), 1);
+    EXPECT_LE(two_level.num_aggregates(), max_aggregates);
+  }
+
   // The same bits on one thread as on two (the products run in parallel, each row in order).
   const int threads = num_threads();
   Eigen::VectorXd one, two;

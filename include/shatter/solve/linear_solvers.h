@@ -133,6 +133,9 @@ class LinearSolver {
     aggregates_pattern_ = 0;
   }
 
+  /// Aggregates of the last pcg_two_level solve (0 before one): at most max_aggregates.
+  [[nodiscard]] Index num_aggregates() const { return num_aggregates_; }
+
   /// Symbolic analyses done so far (the direct solver does one per new pattern).
   [[nodiscard]] int symbolic_analyses() const { return symbolic_analyses_; }
 

@@ -264,7 +264,6 @@ void LinearSolver::prepare_two_level(const BlockSparseMatrix& a) {
                         (na + std::max(1, options_.max_aggregates) - 1) / std::max(1, options_.max_aggregates));
     aggregate_of_.assign(static_cast<std::size_t>(na), -1);
     std::vector<Index> queue;
-    std::vector<Index> members;
     Index count = 0;
     for (Index seed = 0; seed < na; ++seed) {
       if (aggregate_of_[seed] >= 0) continue;
@@ -289,6 +288,35 @@ void LinearSolver::prepare_two_level(const BlockSparseMatrix& a) {
       } else {
         ++count;
       }
+    }
+    // Pieces squeezed between earlier aggregates can leave more than max_aggregates (each coarse
+    // unknown costs the dense factorization dearly): pair each aggregate with its first unpaired
+    // neighbour, in node order, until few enough remain or none can pair.
+    const Index max_count = std::max(1, options_.max_aggregates);
+    while (count > max_count) {
+      std::vector<Index> partner(static_cast<std::size_t>(count), -1);
+      for (Index i = 0; i < na; ++i) {
+        const Index g = aggregate_of_[i];
+        if (partner[g] >= 0) continue;
+        for (Index k = ptr[i]; k < ptr[i + 1]; ++k) {
+          const Index h = aggregate_of_[col[k]];
+          if (h != g && partner[h] < 0) {
+            partner[g] = g;
+            partner[h] = g;
+            break;
+          }
+        }
+      }
+      std::vector<Index> renumber(static_cast<std::size_t>(count), -1);
+      Index next = 0;
+      for (Index g = 0; g < count; ++g) {
+        const Index pair = partner[g] >= 0 ? partner[g] : g;
+        if (renumber[pair] < 0) renumber[pair] = next++;
+        renumber[g] = renumber[pair];
+      }
+      if (next == count) break;
+      for (Index i = 0; i < na; ++i) aggregate_of_[i] = renumber[aggregate_of_[i]];
+      count = next;
     }
     num_aggregates_ = count;
     // Offsets from each aggregate's centre, in units of its radius.
