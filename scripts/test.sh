@@ -15,36 +15,38 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
+# Each step's heading says how long the run has taken so far.
+step() { echo "== $1 (at $((SECONDS / 60)) min $((SECONDS % 60)) s)"; }
 
 scripts/setup.sh --fuzz --tsan --test
 
-echo "== layout"
+step "layout"
 scripts/format.sh --check
 
-echo "== release build and tests"
+step "release build and tests"
 cmake --preset release >/dev/null
 cmake --build --preset release -j "$jobs"
 ctest --preset release -j "$jobs"
 
 if [[ "${SHATTER_QUICK:-0}" == "1" ]]; then exit 0; fi
 
-echo "== clang-tidy"
+step "clang-tidy"
 scripts/tidy.sh build/release
 
-echo "== asan-ubsan build and tests"
+step "asan-ubsan build and tests"
 cmake --preset asan-ubsan >/dev/null
 cmake --build --preset asan-ubsan -j "$jobs"
 ctest --preset asan-ubsan -j "$jobs"
 
-echo "== thread sanitizer build and threaded tests"
+step "thread sanitizer build and threaded tests"
 cmake --preset tsan >/dev/null
 cmake --build --preset tsan -j "$jobs"
 ctest --preset tsan -j "$jobs"
 
-echo "== fuzzing"
+step "fuzzing"
 scripts/fuzz.sh "${SHATTER_FUZZ_SECONDS:-10}"
 
-echo "== find_package(shatter) from another project"
+step "find_package(shatter) from another project"
 scripts/check_install.sh
 
-echo "== all checks passed"
+step "all checks passed"
