@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 
@@ -91,6 +92,39 @@ TEST(Topology, FaceNeighborMatchesTheFaceSort) {
       }
     EXPECT_GT(boundary, 0);
   }
+}
+
+// Incidence for some nodes: their lists are node_tets', the others' are empty, and a face query
+// whose three nodes are wanted gives the same neighbour.
+TEST(Topology, NodeTetsOfSomeNodesMatchTheWholeIncidence) {
+  const TetMesh m = make_box_mesh({.cells = {4, 3, 3}, .pattern = BoxMeshDef::Pattern::five, .jitter = 0.2});
+  const NodeTets all = node_tets(m);
+  std::vector<char> wanted(m.positions.size(), 0);
+  for (std::size_t v = 0; v < wanted.size(); v += 3) wanted[v] = 1;
+  const NodeTets some = node_tets(m, wanted);
+  ASSERT_EQ(some.begin.size(), all.begin.size());
+  std::size_t listed = 0;
+  for (Index v = 0; v < m.num_nodes(); ++v) {
+    const auto a = all.of(v);
+    const auto s = some.of(v);
+    if (wanted[v] != 0) {
+      EXPECT_TRUE(std::equal(a.begin(), a.end(), s.begin(), s.end())) << "node " << v;
+      listed += s.size();
+    } else {
+      EXPECT_TRUE(s.empty()) << "node " << v;
+    }
+  }
+  EXPECT_EQ(some.tets.size(), listed);
+  int queried = 0;
+  for (Index e = 0; e < m.num_tets(); ++e)
+    for (int k = 0; k < 4; ++k) {
+      const TetIndices& t = m.tets[e];
+      if (wanted[t[kTetFaces[k][0]]] == 0 || wanted[t[kTetFaces[k][1]]] == 0 || wanted[t[kTetFaces[k][2]]] == 0)
+        continue;
+      EXPECT_EQ(face_neighbor(m, some, e, k), face_neighbor(m, all, e, k));
+      ++queried;
+    }
+  EXPECT_GT(queried, 0);
 }
 
 TEST(Components, SeparatesDisjointParts) {

@@ -81,6 +81,11 @@ struct NodeTets {
 /// (crack regions, cutting).
 NodeTets node_tets(const TetMesh& mesh);
 
+/// The same lists as node_tets for the nodes with wanted[v] != 0 (#nodes), empty lists for the
+/// others: one pass over the tets that writes only the wanted entries, for queries about a few
+/// nodes of a large mesh (the nodes along a cut).
+NodeTets node_tets(const TetMesh& mesh, std::span<const char> wanted);
+
 /// The tet other than e that has the three nodes of e's local face k (opposite corner k), or -1.
 Index face_neighbor(const TetMesh& mesh, const NodeTets& incidence, Index e, int k);
 

@@ -254,8 +254,10 @@ CutResult split_along_plane(const TetMesh& mesh, const CutPlane& plane, const st
   // Conformity: an edge is split only if every tet around it is split, and a tet only if all its
   // crossed edges are. Shrink both sets to the fixed point (the largest one: the rules only ever
   // remove, so the order of the passes does not change it). The tets around each edge are found
-  // once (CSR).
-  const NodeTets nt_of = node_tets(mesh);
+  // once (CSR, for the crossed edges' end nodes only).
+  std::vector<char> on_edge(static_cast<std::size_t>(nn), 0);
+  for (const Edge& edge : edges) on_edge[edge[0]] = on_edge[edge[1]] = 1;
+  const NodeTets nt_of = node_tets(mesh, on_edge);
   std::vector<Index> edge_tets_begin{0};
   std::vector<Index> edge_tets;
   edge_tets_begin.reserve(edges.size() + 1);
@@ -355,7 +357,6 @@ CutResult split_along_plane(const TetMesh& mesh, const CutPlane& plane, const st
 DisconnectResult disconnect_faces(const TetMesh& mesh, const std::vector<std::int8_t>& tet_side) {
   SHATTER_CHECK(tet_side.size() == mesh.tets.size());
   const Index nn = mesh.num_nodes();
-  const NodeTets nt_of = node_tets(mesh);
   using Face = std::array<Index, 3>;  // sorted node indices
   auto face_key = [&](Index e, int k) {
     const TetIndices& t = mesh.tets[e];
@@ -366,9 +367,14 @@ DisconnectResult disconnect_faces(const TetMesh& mesh, const std::vector<std::in
   // Faces between + and - tets (local search from the marked tets). Only a face whose three nodes
   // all belong to some - tet can have one on its other side: the others need no search.
   std::vector<char> on_minus(static_cast<std::size_t>(nn), 0);
+  std::vector<char> on_plus(static_cast<std::size_t>(nn), 0);
   for (Index e = 0; e < mesh.num_tets(); ++e)
-    if (tet_side[e] < 0)
-      for (Index v : mesh.tets[e]) on_minus[v] = 1;
+    if (tet_side[e] != 0)
+      for (Index v : mesh.tets[e]) (tet_side[e] < 0 ? on_minus : on_plus)[v] = 1;
+  // Every node asked about below is on a face of a + tet whose three nodes are all on - tets.
+  std::vector<char> on_both(static_cast<std::size_t>(nn), 0);
+  for (std::size_t v = 0; v < on_both.size(); ++v) on_both[v] = on_minus[v] & on_plus[v];
+  const NodeTets nt_of = node_tets(mesh, on_both);
   std::vector<Face> cut_faces;
   for (Index e = 0; e < mesh.num_tets(); ++e) {
     if (tet_side[e] <= 0) continue;
@@ -474,41 +480,45 @@ DisconnectResult disconnect_faces(const TetMesh& mesh, const std::vector<std::in
     // connected and redo.
     std::vector<Edge> bad;
     std::vector<std::array<Index, 3>> fan;  // (copy of u, copy of w, third node) per face at the edge
+    std::vector<Edge> face_edges;           // each edge once (most are on two cut faces)
+    face_edges.reserve(3 * active.size());
     for (const Face& f : active)
-      for (int j = 0; j < 3; ++j) {
-        const Index u = f[j], w = f[(j + 1) % 3];
-        const auto tu = nt_of.of(u);
-        const auto tw = nt_of.of(w);
-        fan.clear();
-        for (Index e : tu) {
-          if (!std::binary_search(tw.begin(), tw.end(), e)) continue;
-          Index cu = -1, cw = -1;
-          std::array<Index, 2> others{};
-          int no = 0;
-          for (int k = 0; k < 4; ++k) {
-            if (mesh.tets[e][k] == u)
-              cu = r.mesh.tets[e][k];
-            else if (mesh.tets[e][k] == w)
-              cw = r.mesh.tets[e][k];
-            else
-              others[no++] = r.mesh.tets[e][k];
-          }
-          for (Index o : others) fan.push_back({cu, cw, o});
+      for (int j = 0; j < 3; ++j) face_edges.push_back(make_edge(f[j], f[(j + 1) % 3]));
+    std::sort(face_edges.begin(), face_edges.end());
+    face_edges.erase(std::unique(face_edges.begin(), face_edges.end()), face_edges.end());
+    for (const auto& [u, w] : face_edges) {
+      const auto tu = nt_of.of(u);
+      const auto tw = nt_of.of(w);
+      fan.clear();
+      for (Index e : tu) {
+        if (!std::binary_search(tw.begin(), tw.end(), e)) continue;
+        Index cu = -1, cw = -1;
+        std::array<Index, 2> others{};
+        int no = 0;
+        for (int k = 0; k < 4; ++k) {
+          if (mesh.tets[e][k] == u)
+            cu = r.mesh.tets[e][k];
+          else if (mesh.tets[e][k] == w)
+            cw = r.mesh.tets[e][k];
+          else
+            others[no++] = r.mesh.tets[e][k];
         }
-        std::sort(fan.begin(), fan.end());
-        for (std::size_t i = 0; i < fan.size();) {
-          std::size_t end = i;
-          int boundary = 0;
-          while (end < fan.size() && fan[end][0] == fan[i][0] && fan[end][1] == fan[i][1]) {
-            std::size_t same = end;
-            while (same < fan.size() && fan[same] == fan[end]) ++same;
-            boundary += same - end == 1;
-            end = same;
-          }
-          if (boundary > 2) bad.push_back(make_edge(u, w));
-          i = end;
-        }
+        for (Index o : others) fan.push_back({cu, cw, o});
       }
+      std::sort(fan.begin(), fan.end());
+      for (std::size_t i = 0; i < fan.size();) {
+        std::size_t end = i;
+        int boundary = 0;
+        while (end < fan.size() && fan[end][0] == fan[i][0] && fan[end][1] == fan[i][1]) {
+          std::size_t same = end;
+          while (same < fan.size() && fan[same] == fan[end]) ++same;
+          boundary += same - end == 1;
+          end = same;
+        }
+        if (boundary > 2) bad.push_back(make_edge(u, w));
+        i = end;
+      }
+    }
     if (bad.empty()) break;
     std::sort(bad.begin(), bad.end());
     bool changed = false;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <numeric>
 
+#include "shatter/core/assert.h"
+
 namespace shatter {
 
 TetFaces compute_faces(const TetMesh& mesh) {
@@ -125,6 +127,21 @@ NodeTets node_tets(const TetMesh& mesh) {
   std::vector<Index> fill(n.begin.begin(), n.begin.end() - 1);
   for (Index e = 0; e < mesh.num_tets(); ++e)
     for (Index v : mesh.tets[e]) n.tets[fill[v]++] = e;
+  return n;
+}
+
+NodeTets node_tets(const TetMesh& mesh, std::span<const char> wanted) {
+  SHATTER_CHECK(wanted.size() == mesh.positions.size());
+  NodeTets n;
+  n.begin.assign(mesh.positions.size() + 1, 0);
+  for (const TetIndices& t : mesh.tets)
+    for (Index v : t) n.begin[v + 1] += wanted[v] != 0 ? 1 : 0;
+  for (std::size_t i = 1; i < n.begin.size(); ++i) n.begin[i] += n.begin[i - 1];
+  n.tets.resize(static_cast<std::size_t>(n.begin.back()));
+  std::vector<Index> fill(n.begin.begin(), n.begin.end() - 1);
+  for (Index e = 0; e < mesh.num_tets(); ++e)
+    for (Index v : mesh.tets[e])
+      if (wanted[v] != 0) n.tets[fill[v]++] = e;
   return n;
 }
 
