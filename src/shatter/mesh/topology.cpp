@@ -117,32 +117,33 @@ Components connected_components(const TetMesh& mesh) {
   return c;
 }
 
-NodeTets node_tets(const TetMesh& mesh) {
+namespace {
+// Counting sort of (node, tet) pairs into CSR, for the nodes with wanted(v) only; tets ascend
+// in each list.
+template <class Wanted>
+NodeTets node_tets_where(const TetMesh& mesh, Wanted wanted) {
   NodeTets n;
   n.begin.assign(mesh.positions.size() + 1, 0);
   for (const TetIndices& t : mesh.tets)
-    for (Index v : t) ++n.begin[v + 1];
-  for (std::size_t i = 1; i < n.begin.size(); ++i) n.begin[i] += n.begin[i - 1];
-  n.tets.resize(static_cast<std::size_t>(n.begin.back()));
-  std::vector<Index> fill(n.begin.begin(), n.begin.end() - 1);
-  for (Index e = 0; e < mesh.num_tets(); ++e)
-    for (Index v : mesh.tets[e]) n.tets[fill[v]++] = e;
-  return n;
-}
-
-NodeTets node_tets(const TetMesh& mesh, std::span<const char> wanted) {
-  SHATTER_CHECK(wanted.size() == mesh.positions.size());
-  NodeTets n;
-  n.begin.assign(mesh.positions.size() + 1, 0);
-  for (const TetIndices& t : mesh.tets)
-    for (Index v : t) n.begin[v + 1] += wanted[v] != 0 ? 1 : 0;
+    for (Index v : t)
+      if (wanted(v)) ++n.begin[v + 1];
   for (std::size_t i = 1; i < n.begin.size(); ++i) n.begin[i] += n.begin[i - 1];
   n.tets.resize(static_cast<std::size_t>(n.begin.back()));
   std::vector<Index> fill(n.begin.begin(), n.begin.end() - 1);
   for (Index e = 0; e < mesh.num_tets(); ++e)
     for (Index v : mesh.tets[e])
-      if (wanted[v] != 0) n.tets[fill[v]++] = e;
+      if (wanted(v)) n.tets[fill[v]++] = e;
   return n;
+}
+}  // namespace
+
+NodeTets node_tets(const TetMesh& mesh) {
+  return node_tets_where(mesh, [](Index) { return true; });
+}
+
+NodeTets node_tets(const TetMesh& mesh, std::span<const char> wanted) {
+  SHATTER_CHECK(wanted.size() == mesh.positions.size());
+  return node_tets_where(mesh, [&](Index v) { return wanted[v] != 0; });
 }
 
 Index face_neighbor(const TetMesh& mesh, const NodeTets& incidence, Index e, int k) {
