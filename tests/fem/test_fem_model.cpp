@@ -7,6 +7,7 @@
 #include "fem_test_util.h"
 #include "shatter/core/parallel.h"
 #include "shatter/core/random.h"
+#include "shatter/core/simd.h"
 #include "shatter/fem/fem_model.h"
 #include "shatter/mesh/generate.h"
 #include "support/test_support.h"
@@ -133,7 +134,7 @@ TEST(FemModel, AcceleratedMatchesReferenceOnAnyThreadCount) {
 TEST(FemModel, BaselineAndAvx2KernelsGiveTheSameBits) {
   Random rng(25);
   const TetMesh mesh = make_box_mesh({.max = Vec3(1, 0.6, 0.4), .cells = {9, 6, 5}, .jitter = 0.2, .seed = 5});
-  const ForceKernelIsa saved = force_kernel_isa();
+  const SimdIsa saved = simd_isa();
   for (ModelKind kind : kAllModels) {
     const FemModel model = make_fem_model(mesh, test_material(), kind);
     for (double amount : {0.001, 0.5}) {
@@ -142,12 +143,12 @@ TEST(FemModel, BaselineAndAvx2KernelsGiveTheSameBits) {
       for (Vec3& p : x) p += rng.uniform_vec3(-0.05, 0.05) * amount;
       for (std::size_t i = 5; i < x.size(); i += 41) x[i] += Vec3(0.3, -0.2, 0.25) * amount;  // inverts some
       std::vector<Vec3> f_baseline, f_avx2, f_ref;
-      set_force_kernel_isa(ForceKernelIsa::baseline);
-      EXPECT_EQ(force_kernel_isa(), ForceKernelIsa::baseline);
+      set_simd_isa(SimdIsa::baseline);
+      EXPECT_EQ(simd_isa(), SimdIsa::baseline);
       internal_forces(model, x, f_baseline);
-      set_force_kernel_isa(ForceKernelIsa::avx2);
+      set_simd_isa(SimdIsa::avx2);
       internal_forces(model, x, f_avx2);
-      set_force_kernel_isa(saved);
+      set_simd_isa(saved);
       EXPECT_EQ(f_baseline, f_avx2);
       internal_forces_reference(model, x, f_ref);
       EXPECT_LT(max_diff(f_baseline, f_ref), 1e-10 * max_norm(f_ref));

@@ -82,15 +82,6 @@ struct ForceWorkspace {
   std::vector<double> slots;  ///< 4 doubles per slot, N
 };
 
-/// The instructions the accelerated force kernels of internal_forces use: the build's baseline
-/// (SSE) or AVX2. Both give the same bits: the same operations in the same order, none fused.
-enum class ForceKernelIsa { baseline, avx2 };
-/// By default AVX2 where the CPU has it. Process-wide; for checking and timing. Asking for avx2 on a
-/// CPU without it gives baseline.
-void set_force_kernel_isa(ForceKernelIsa isa);
-/// The kernels internal_forces uses now.
-[[nodiscard]] ForceKernelIsa force_kernel_isa();
-
 /// The same, fast: fixed blocks of tets in parallel (stvk by specialised inline code on the compact
 /// rest data, the other models per tet); the result does not depend on the thread count (bitwise)
 /// and equals the reference to round-off.

@@ -6,11 +6,11 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
 #include <cstring>
 
 #include "shatter/core/parallel.h"
+#include "shatter/core/simd.h"
 
 namespace shatter {
 namespace {
@@ -473,7 +473,7 @@ struct RotatedFrame {
 }
 
 // Each kernel twice: for AVX2, and for the baseline (x86-64-v2 here). Same source, same
-// operations, same bits; force_kernel_isa picks one.
+// operations, same bits; simd_isa picks one.
 #define SHATTER_KERNEL_PAIR(name)                                           \
   [[gnu::target("avx2")]] void name##_avx2(const BlockArgs& a) { name(a); } \
   void name##_baseline(const BlockArgs& a) { name(a); }
@@ -487,29 +487,6 @@ SHATTER_KERNEL_PAIR(corotated_forces_block)
 #undef SHATTER_LANE_MAX
 #undef SHATTER_LANE_SQRT
 #pragma GCC diagnostic pop
-
-namespace {
-
-bool cpu_has_avx2() {
-  __builtin_cpu_init();
-  return __builtin_cpu_supports("avx2");
-}
-
-// 0 = automatic (AVX2 where the CPU has it), else ForceKernelIsa + 1.
-std::atomic<int> g_force_kernel_isa{0};
-
-}  // namespace
-
-void set_force_kernel_isa(ForceKernelIsa isa) {
-  g_force_kernel_isa.store(isa == ForceKernelIsa::avx2 && !cpu_has_avx2() ? 1 : static_cast<int>(isa) + 1);
-}
-
-ForceKernelIsa force_kernel_isa() {
-  static const bool has_avx2 = cpu_has_avx2();
-  const int chosen = g_force_kernel_isa.load();
-  if (chosen == 0) return has_avx2 ? ForceKernelIsa::avx2 : ForceKernelIsa::baseline;
-  return static_cast<ForceKernelIsa>(chosen - 1);
-}
 
 FemModel make_fem_model(const TetMesh& rest_mesh, const Material& material, ModelKind kind, const RestSource& from) {
   SHATTER_CHECK(!from.model || (from.model->model == kind && from.tet.size() == rest_mesh.tets.size()));
@@ -593,7 +570,7 @@ void internal_forces(const FemModel& model, const std::vector<Vec3>& x, std::vec
   double* acc = scratch.data();
   const Vec3* xp = x.data();
   using Kernel = void (*)(const BlockArgs&);
-  const bool avx2 = force_kernel_isa() == ForceKernelIsa::avx2;
+  const bool avx2 = simd_isa() == SimdIsa::avx2;
   Kernel kernel = nullptr;
   if (model.model == ModelKind::stvk) kernel = avx2 ? stvk_forces_block_avx2 : stvk_forces_block_baseline;
   if (model.model == ModelKind::linear) kernel = avx2 ? linear_forces_block_avx2 : linear_forces_block_baseline;
