@@ -11,51 +11,81 @@ namespace {
 // Velocity of the material point at offset r of body b, m/s.
 Vec3 point_velocity(const SolverBody& b, const Vec3& r) { return b.linear_velocity + b.angular_velocity.cross(r); }
 
-// Apply impulse l along unit direction d (on B; -l d on A) whose angular responses are ang_a and
-// ang_b (I^-1 (r x d) of each body). A body without response (static, kinematic, asleep: zero
-// inverse mass and inertia) is left alone: its velocity would only change by zero, and every
-// contact with the ground would otherwise write the ground's one slot, each waiting for the last.
-void apply_row(const ContactConstraint& c, SolverBody& a, SolverBody& b, const Vec3& d, const Vec3& ang_a,
-               const Vec3& ang_b, double l) {
-  if (c.a_responds) {
-    a.linear_velocity -= (a.inverse_mass * l) * d;
-    a.angular_velocity -= l * ang_a;
-  }
-  if (c.b_responds) {
-    b.linear_velocity += (b.inverse_mass * l) * d;
-    b.angular_velocity += l * ang_b;
-  }
-}
+// The velocities of a constraint's two bodies, copied out of the body array for one pass over the
+// constraint and written back once at its end: the compiler keeps them in registers across the
+// rows instead of reloading them through the array after every impulse.
+struct PairMotion {
+  Vec3 va, wa, vb, wb;  // linear (m/s) and angular (rad/s) velocity of A and of B
+  double inverse_mass_a, inverse_mass_b;
+  bool a_responds, b_responds;
 
-// Relative velocity along a row: d . (v_B - v_A) + r_b . w_B - r_a . w_A (r = anchor x d).
-double row_velocity(const SolverBody& a, const SolverBody& b, const Vec3& d, const Vec3& r_a, const Vec3& r_b) {
-  return d.dot(b.linear_velocity - a.linear_velocity) + r_b.dot(b.angular_velocity) - r_a.dot(a.angular_velocity);
-}
+  PairMotion(const ContactConstraint& c, std::span<const SolverBody> bodies)
+      : va(bodies[c.body_a].linear_velocity),
+        wa(bodies[c.body_a].angular_velocity),
+        vb(bodies[c.body_b].linear_velocity),
+        wb(bodies[c.body_b].angular_velocity),
+        inverse_mass_a(bodies[c.body_a].inverse_mass),
+        inverse_mass_b(bodies[c.body_b].inverse_mass),
+        a_responds(c.a_responds),
+        b_responds(c.b_responds) {}
+
+  // A body without response (static, kinematic, asleep: zero inverse mass and inertia) is never
+  // written: its velocity would only change by zero, and every contact with the ground would
+  // otherwise write the ground's one slot, each waiting for the last.
+  void store(const ContactConstraint& c, std::span<SolverBody> bodies) const {
+    if (a_responds) {
+      bodies[c.body_a].linear_velocity = va;
+      bodies[c.body_a].angular_velocity = wa;
+    }
+    if (b_responds) {
+      bodies[c.body_b].linear_velocity = vb;
+      bodies[c.body_b].angular_velocity = wb;
+    }
+  }
+
+  // Apply impulse l along unit direction d (on B; -l d on A) whose angular responses are ang_a and
+  // ang_b (I^-1 (r x d) of each body).
+  [[gnu::always_inline]] void apply_row(const Vec3& d, const Vec3& ang_a, const Vec3& ang_b, double l) {
+    if (a_responds) {
+      va -= (inverse_mass_a * l) * d;
+      wa -= l * ang_a;
+    }
+    if (b_responds) {
+      vb += (inverse_mass_b * l) * d;
+      wb += l * ang_b;
+    }
+  }
+
+  // Relative velocity along a row: d . (v_B - v_A) + r_b . w_B - r_a . w_A (r = anchor x d).
+  [[gnu::always_inline]] double row_velocity(const Vec3& d, const Vec3& r_a, const Vec3& r_b) const {
+    return d.dot(vb - va) + r_b.dot(wb) - r_a.dot(wa);
+  }
+};
 
 // One normal row: the accumulated impulse moves by -m (scale vn + bias) - impulse_scale * lambda,
 // clamped at 0 (Box2D's soft contact). Returns the impulse applied.
-double solve_normal(ContactConstraint& c, ContactPoint& p, SolverBody& a, SolverBody& b, double bias, double mass_scale,
-                    double impulse_scale) {
-  const double vn = row_velocity(a, b, c.normal, p.rn_a, p.rn_b);
+[[gnu::always_inline]] inline double solve_normal(const ContactConstraint& c, ContactPoint& p, PairMotion& m,
+                                                  double bias, double mass_scale, double impulse_scale) {
+  const double vn = m.row_velocity(c.normal, p.rn_a, p.rn_b);
   const double delta = -p.normal_mass * (mass_scale * vn + bias) - impulse_scale * p.normal_impulse;
   const double next = std::max(p.normal_impulse + delta, 0.0);
   const double applied = next - p.normal_impulse;
   p.normal_impulse = next;
   p.max_normal_impulse = std::max(p.max_normal_impulse, next);
   p.total_normal_impulse += applied;
-  apply_row(c, a, b, c.normal, p.ang_a, p.ang_b, applied);
+  m.apply_row(c.normal, p.ang_a, p.ang_b, applied);
   return applied;
 }
 
 // Apply the friction impulse f (x along tangent 0, y along tangent 1) at the friction centre.
-void apply_friction(const ContactConstraint& c, SolverBody& a, SolverBody& b, const Eigen::Vector2d& f) {
-  apply_row(c, a, b, c.tangents[0], c.ang_ta[0], c.ang_tb[0], f.x());
-  apply_row(c, a, b, c.tangents[1], c.ang_ta[1], c.ang_tb[1], f.y());
+[[gnu::always_inline]] inline void apply_friction(const ContactConstraint& c, PairMotion& m, const Eigen::Vector2d& f) {
+  m.apply_row(c.tangents[0], c.ang_ta[0], c.ang_tb[0], f.x());
+  m.apply_row(c.tangents[1], c.ang_ta[1], c.ang_tb[1], f.y());
 }
 // Apply the twist impulse t about the normal.
-void apply_twist(const ContactConstraint& c, SolverBody& a, SolverBody& b, double t) {
-  if (c.a_responds) a.angular_velocity -= t * c.twist_a;
-  if (c.b_responds) b.angular_velocity += t * c.twist_b;
+[[gnu::always_inline]] inline void apply_twist(const ContactConstraint& c, PairMotion& m, double t) {
+  if (m.a_responds) m.wa -= t * c.twist_a;
+  if (m.b_responds) m.wb += t * c.twist_b;
 }
 
 }  // namespace
@@ -130,15 +160,15 @@ void prepare_contact(ContactConstraint& c, std::span<const SolverBody> bodies, d
 }
 
 void warm_start_contact(ContactConstraint& c, std::span<SolverBody> bodies) {
-  SolverBody& a = bodies[c.body_a];
-  SolverBody& b = bodies[c.body_b];
+  PairMotion m(c, bodies);
   for (int i = 0; i < c.count; ++i) {
     ContactPoint& p = c.points[i];
-    apply_row(c, a, b, c.normal, p.ang_a, p.ang_b, p.normal_impulse);
+    m.apply_row(c.normal, p.ang_a, p.ang_b, p.normal_impulse);
     p.total_normal_impulse += p.normal_impulse;
   }
-  apply_friction(c, a, b, c.friction_impulse);
-  apply_twist(c, a, b, c.twist_impulse);
+  apply_friction(c, m, c.friction_impulse);
+  apply_twist(c, m, c.twist_impulse);
+  m.store(c, bodies);
   c.total_twist_impulse += c.twist_impulse;
   c.total_friction_impulse += c.friction_impulse.x() * c.tangents[0] + c.friction_impulse.y() * c.tangents[1];
 }
@@ -153,43 +183,50 @@ double current_separation(const ContactConstraint& c, const ContactPoint& p, std
 
 void solve_contact(ContactConstraint& c, std::span<SolverBody> bodies, double inverse_h, bool use_bias,
                    double max_push_velocity) {
-  SolverBody& a = bodies[c.body_a];
-  SolverBody& b = bodies[c.body_b];
+  PairMotion m(c, bodies);
+  // Each point's current separation, s0 + n . (p_B - p_A) with p = x + R r_local, from the normal
+  // turned into each body's frame once per pass: n . (R r) = (R^T n) . r.
+  const SolverBody& a = bodies[c.body_a];
+  const SolverBody& b = bodies[c.body_b];
+  const Vec3 normal_in_a = a.rotation.transpose() * c.normal;
+  const Vec3 normal_in_b = b.rotation.transpose() * c.normal;
+  const double centre_gap = c.normal.dot(b.position) - c.normal.dot(a.position);
   double total_normal = 0;
   double twist_limit = 0;
   for (int i = 0; i < c.count; ++i) {
     ContactPoint& p = c.points[i];
-    const double s = current_separation(c, p, bodies);
+    const double s =
+        p.separation + centre_gap + (normal_in_b.dot(p.local_anchor_b) - normal_in_a.dot(p.local_anchor_a));
     if (use_bias) {
       // The fastest approach met before a solve in this step: the impact speed, which the step's
       // start velocity underestimates by up to g dt when the impact falls late in the step.
-      p.approach_speed = std::max(p.approach_speed, -row_velocity(a, b, c.normal, p.rn_a, p.rn_b));
+      p.approach_speed = std::max(p.approach_speed, -m.row_velocity(c.normal, p.rn_a, p.rn_b));
     }
     if (s > 0) {
-      solve_normal(c, p, a, b, s * inverse_h, 1, 0);  // speculative: close the gap within the substep, no more
+      solve_normal(c, p, m, s * inverse_h, 1, 0);  // speculative: close the gap within the substep, no more
     } else if (use_bias) {
       const Softness& soft = c.softness;
-      solve_normal(c, p, a, b, std::max(soft.mass_scale * soft.bias_rate * s, -max_push_velocity), soft.mass_scale,
+      solve_normal(c, p, m, std::max(soft.mass_scale * soft.bias_rate * s, -max_push_velocity), soft.mass_scale,
                    soft.impulse_scale);
     } else {
-      solve_normal(c, p, a, b, 0, 1, 0);
+      solve_normal(c, p, m, 0, 1, 0);
     }
     total_normal += p.normal_impulse;
     twist_limit += p.lever_arm * p.normal_impulse;
   }
   // Twist friction about the normal.
   {
-    const double spin = c.normal.dot(b.angular_velocity - a.angular_velocity);
+    const double spin = c.normal.dot(m.wb - m.wa);
     const double limit = c.friction * twist_limit;
     const double next = std::clamp(c.twist_impulse - c.twist_mass * spin, -limit, limit);
-    apply_twist(c, a, b, next - c.twist_impulse);
+    apply_twist(c, m, next - c.twist_impulse);
     c.total_twist_impulse += next - c.twist_impulse;
     c.twist_impulse = next;
   }
   // Coulomb friction at the centre, the tangent impulse clamped to the friction disc.
   {
-    const Eigen::Vector2d vt(row_velocity(a, b, c.tangents[0], c.rt_a[0], c.rt_b[0]),
-                             row_velocity(a, b, c.tangents[1], c.rt_a[1], c.rt_b[1]));
+    const Eigen::Vector2d vt(m.row_velocity(c.tangents[0], c.rt_a[0], c.rt_b[0]),
+                             m.row_velocity(c.tangents[1], c.rt_a[1], c.rt_b[1]));
     Eigen::Vector2d next = c.friction_impulse - c.tangent_mass * vt;
     const double limit = c.friction * total_normal;
     const double norm = next.norm();
@@ -197,19 +234,20 @@ void solve_contact(ContactConstraint& c, std::span<SolverBody> bodies, double in
     const Eigen::Vector2d delta = next - c.friction_impulse;
     c.friction_impulse = next;
     c.total_friction_impulse += delta.x() * c.tangents[0] + delta.y() * c.tangents[1];
-    apply_friction(c, a, b, delta);
+    apply_friction(c, m, delta);
   }
+  m.store(c, bodies);
 }
 
 void apply_restitution(ContactConstraint& c, std::span<SolverBody> bodies, double threshold) {
   if (c.restitution == 0) return;
-  SolverBody& a = bodies[c.body_a];
-  SolverBody& b = bodies[c.body_b];
+  PairMotion m(c, bodies);
   for (int i = 0; i < c.count; ++i) {
     ContactPoint& p = c.points[i];
     if (p.approach_speed < threshold || p.max_normal_impulse == 0) continue;
-    solve_normal(c, p, a, b, -c.restitution * p.approach_speed, 1, 0);
+    solve_normal(c, p, m, -c.restitution * p.approach_speed, 1, 0);
   }
+  m.store(c, bodies);
 }
 
 }  // namespace shatter
