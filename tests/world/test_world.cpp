@@ -1,6 +1,6 @@
 // The world's step on analytic and classic scenes: free flight, torque-free tumbling, bounces at
 // every impact phase, friction on an incline, resting stacks and their sleep, fast thin shards that
-// must not tunnel, and the state hash over runs, thread counts and save/restore.
+// must not tunnel, and the state hash over runs, thread counts, instruction sets and save/restore.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "shatter/core/parallel.h"
+#include "shatter/core/simd.h"
 #include "shatter/fracture/fragments.h"
 #include "shatter/mesh/io/mesh_io.h"
 #include "support/test_support.h"
@@ -281,6 +282,16 @@ TEST(World, StateHashIsTheSameAcrossRunsThreadCountsAndRestore) {
   EXPECT_EQ(pile_hash(2, steps, -1), h1);
   EXPECT_EQ(pile_hash(4, steps, -1), h1);
   EXPECT_EQ(pile_hash(2, steps, 70), h1);
+}
+
+TEST(World, StateHashIsTheSameWithEitherInstructionSet) {
+  const SimdIsa saved = simd_isa();
+  set_simd_isa(SimdIsa::baseline);
+  const std::uint64_t baseline = pile_hash(1, 150, -1);
+  set_simd_isa(SimdIsa::avx2);  // baseline again on a CPU without AVX2
+  const std::uint64_t avx2 = pile_hash(2, 150, -1);
+  set_simd_isa(saved);
+  EXPECT_EQ(baseline, avx2);
 }
 
 TEST(World, RestingBoxCarriesItsWeightInTheStepImpulse) {

@@ -28,6 +28,7 @@
 #include "shatter/core/error.h"
 #include "shatter/core/types.h"
 #include "shatter/rigid/body.h"
+#include "shatter/rigid/contact_batches.h"
 #include "shatter/rigid/contact_solver.h"
 #include "shatter/rigid/impact.h"
 #include "shatter/rigid/integrate.h"
@@ -530,6 +531,7 @@ class World {
   std::vector<std::vector<Contact>> pair_contacts_;
   std::vector<Contact> next_contacts_;  ///< the narrow phase's output buffer (swapped with contacts_)
   std::vector<SolverBody> solver_bodies_;
+  ContactBatches contact_batches_;
   std::vector<Index> island_parent_;
   std::vector<Index> island_of_;
 };
