@@ -45,7 +45,8 @@ void integrate_velocity(const RigidInertia& inertia, RigidState& state, const Ve
 
 /// Drift: x += dt v, and the torque-free rotation over dt described at the top of this file. The
 /// angular velocity is updated to the end-of-step one (w = R' I_b^-1 L_b'). An infinitely heavy
-/// (kinematic) body turns at its given world angular velocity instead.
-void integrate_position(const RigidInertia& inertia, RigidState& state, double dt);
+/// (kinematic) body turns at its given world angular velocity instead. `rotation`, when given, gets
+/// the new orientation as a matrix (computed on the way).
+void integrate_position(const RigidInertia& inertia, RigidState& state, double dt, Mat3* rotation = nullptr);
 
 }  // namespace shatter

@@ -31,11 +31,13 @@ bool midpoint_velocity(const Mat3& inverse_inertia, const Vec3& l_body, double d
   // First guess: the midpoint momentum after half an explicit step, L + dt/2 (L x w).
   const Vec3 w0 = inverse_inertia * l_body;
   w = inverse_inertia * (l_body + (0.5 * dt) * l_body.cross(w0));
+  // Converged when the change is at most 4 ulp of |w|, compared squared (no square roots).
+  constexpr double kTolerance = 16 * std::numeric_limits<double>::epsilon() * std::numeric_limits<double>::epsilon();
   for (int it = 0; it < 200; ++it) {
     const Vec3 next = inverse_inertia * (0.5 * (l_body + cayley_rotate(w, dt, l_body)));
-    const double change = (next - w).norm();
+    const double change = (next - w).squaredNorm();
     w = next;
-    if (change <= 4 * std::numeric_limits<double>::epsilon() * w.norm()) return true;
+    if (change <= kTolerance * w.squaredNorm()) return true;
   }
   return false;
 }
@@ -96,19 +98,25 @@ void integrate_velocity(const RigidInertia& inertia, RigidState& state, const Ve
   state.angular_velocity = world_inverse_inertia(inertia, state.orientation) * l;
 }
 
-void integrate_position(const RigidInertia& inertia, RigidState& state, double dt) {
+void integrate_position(const RigidInertia& inertia, RigidState& state, double dt, Mat3* rotation) {
   state.position += dt * state.linear_velocity;
-  if (state.angular_velocity.squaredNorm() == 0) return;
+  if (state.angular_velocity.squaredNorm() == 0) {
+    if (rotation != nullptr) *rotation = state.orientation.toRotationMatrix();
+    return;
+  }
   if (inertia.inverse_mass == 0) {  // kinematic: turn at the given (world) angular velocity exactly
     const double angle = dt * state.angular_velocity.norm();
     const Quat turn(Eigen::AngleAxisd(angle, state.angular_velocity.normalized()));
     state.orientation = (turn * state.orientation).normalized();
+    if (rotation != nullptr) *rotation = state.orientation.toRotationMatrix();
     return;
   }
   const Mat3 R = state.orientation.toRotationMatrix();
   Vec3 l_body = inertia.inertia_body * (R.transpose() * state.angular_velocity);
   rotate(inertia.inverse_inertia_body, state.orientation, l_body, dt, 0);
-  state.angular_velocity = state.orientation.toRotationMatrix() * (inertia.inverse_inertia_body * l_body);
+  const Mat3 turned = state.orientation.toRotationMatrix();
+  state.angular_velocity = turned * (inertia.inverse_inertia_body * l_body);
+  if (rotation != nullptr) *rotation = turned;
 }
 
 }  // namespace shatter

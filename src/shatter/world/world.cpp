@@ -789,10 +789,9 @@ void World::solve() {
           SolverBody& s = solver_bodies_[i];
           b.rigid.linear_velocity = s.linear_velocity;
           b.rigid.angular_velocity = s.angular_velocity;
-          integrate_position(b.inertia, b.rigid, h);
+          integrate_position(b.inertia, b.rigid, h, &s.rotation);
           s.angular_velocity = b.rigid.angular_velocity;
           s.position = b.rigid.position;
-          s.rotation = b.rigid.orientation.toRotationMatrix();
         },
         settings_.parallel_min_bodies);
     contact_batches_.solve(solver_bodies_, inverse_h, false, settings_.contact.max_push_velocity);
