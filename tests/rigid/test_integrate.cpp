@@ -1,9 +1,16 @@
 // Rigid-body integration: free flight, torque-free tumbling (angular momentum kept, energy never
-// gained, the intermediate-axis flip), fast spins, kicks by torque.
+// gained, the intermediate-axis flip), fast spins, kicks by torque, four bodies at a time.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
+#include <span>
+#include <vector>
 
+#include "shatter/core/random.h"
+#include "shatter/core/simd.h"
 #include "shatter/mesh/generate.h"
 #include "shatter/rigid/integrate.h"
 
@@ -15,6 +22,15 @@ RigidInertia brick() {
   const TetMesh m =
       make_box_mesh({.min = Vec3(-0.15, -0.05, -0.025), .max = Vec3(0.15, 0.05, 0.025), .cells = {6, 2, 1}});
   return rigid_inertia(mass_properties(m, 2400));
+}
+
+// The bit patterns of a vector or matrix's entries.
+template <class Derived>
+std::vector<std::uint64_t> bits(const Eigen::MatrixBase<Derived>& m) {
+  std::vector<std::uint64_t> out;
+  out.reserve(static_cast<std::size_t>(m.size()));
+  for (Eigen::Index i = 0; i < m.size(); ++i) out.push_back(std::bit_cast<std::uint64_t>(m(i)));
+  return out;
 }
 
 TEST(RigidIntegrate, FreeFlightIsTheDiscreteParabola) {
@@ -113,6 +129,57 @@ TEST(RigidIntegrate, KinematicBodyTurnsAtItsAngularVelocity) {
   for (int i = 0; i < 10; ++i) integrate_position(kinematic, s, 0.1);
   EXPECT_LT(s.orientation.angularDistance(Quat(Eigen::AngleAxisd(2.0, Vec3::UnitY()))), 1e-12);
   EXPECT_LT((s.position - Vec3(1, 0, 0)).norm(), 1e-15);
+}
+
+}  // namespace
+}  // namespace shatter
+
+namespace shatter {
+namespace {
+
+// Four at a time gives the bits of one at a time, with either instruction set: groups of 1 to 4
+// bodies, spinning slowly (one iteration), fast (many, some splitting the step), not at all, or
+// kinematic.
+TEST(RigidIntegrate, FourAtATimeGiveTheBitsOfOneAtATime) {
+  const SimdIsa saved = simd_isa();
+  Random rng(21);
+  const RigidInertia dynamic = brick();
+  const RigidInertia kinematic;
+  for (const SimdIsa isa : {SimdIsa::baseline, SimdIsa::avx2}) {
+    set_simd_isa(isa);
+    for (int trial = 0; trial < 200; ++trial) {
+      const auto count = static_cast<std::size_t>(1 + rng.below(4));
+      std::array<RigidState, 4> one{}, four{};
+      std::array<const RigidInertia*, 4> inertia{};
+      for (std::size_t i = 0; i < count; ++i) {
+        RigidState& s = one[i];
+        s.position = rng.uniform_vec3(-1, 1);
+        s.linear_velocity = rng.uniform_vec3(-2, 2);
+        s.orientation = Quat(Eigen::AngleAxisd(rng.uniform(0, 3), rng.uniform_vec3(-1, 1).normalized()));
+        const double speed = std::array{0.0, 1e-4, 1.0, 300.0}[rng.below(4)];
+        s.angular_velocity = speed * rng.uniform_vec3(-1, 1);
+        inertia[i] = trial % 7 == 0 && i == 0 ? &kinematic : &dynamic;
+        four[i] = s;
+      }
+      std::array<Mat3, 4> r_one{}, r_four{};
+      std::array<RigidState*, 4> states{};
+      std::array<Mat3*, 4> rotations{};
+      for (std::size_t i = 0; i < count; ++i) {
+        integrate_position(*inertia[i], one[i], 1.0 / 480, &r_one[i]);
+        states[i] = &four[i];
+        rotations[i] = &r_four[i];
+      }
+      integrate_positions(std::span(inertia.data(), count), std::span(states.data(), count), 1.0 / 480,
+                          std::span(rotations.data(), count));
+      for (std::size_t i = 0; i < count; ++i) {
+        EXPECT_EQ(bits(one[i].position), bits(four[i].position)) << trial << " " << i;
+        EXPECT_EQ(bits(one[i].angular_velocity), bits(four[i].angular_velocity)) << trial << " " << i;
+        EXPECT_EQ(bits(one[i].orientation.coeffs()), bits(four[i].orientation.coeffs())) << trial << " " << i;
+        EXPECT_EQ(bits(r_one[i]), bits(r_four[i])) << trial << " " << i;
+      }
+    }
+  }
+  set_simd_isa(saved);
 }
 
 }  // namespace

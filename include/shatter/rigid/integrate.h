@@ -11,7 +11,10 @@
 //   - the orientation stays a unit quaternion (q' = q (1, dt w_mid / 2) normalised, the quaternion
 //     of the Cayley rotation), and the scheme is time-reversible.
 // It reproduces the intermediate-axis (Dzhanibekov) flip of a free asymmetric body.
+// integrate_positions drifts up to four bodies at once with the same arithmetic (the same bits).
 #pragma once
+
+#include <span>
 
 #include "shatter/core/types.h"
 #include "shatter/rigid/body.h"
@@ -48,5 +51,11 @@ void integrate_velocity(const RigidInertia& inertia, RigidState& state, const Ve
 /// (kinematic) body turns at its given world angular velocity instead. `rotation`, when given, gets
 /// the new orientation as a matrix (computed on the way).
 void integrate_position(const RigidInertia& inertia, RigidState& state, double dt, Mat3* rotation = nullptr);
+
+/// integrate_position on up to four bodies at once, the same bits as one at a time: dynamic bodies
+/// that spin are drifted side by side in vector lanes (AVX2 where the CPU has it, core/simd.h).
+/// `rotations[i]` may be null. The three spans have the same length, at most 4.
+void integrate_positions(std::span<const RigidInertia* const> inertia, std::span<RigidState* const> states, double dt,
+                         std::span<Mat3* const> rotations);
 
 }  // namespace shatter

@@ -6,38 +6,155 @@
 #include <cmath>
 #include <limits>
 
+#include "shatter/core/assert.h"
+#include "shatter/core/simd.h"
+
 namespace shatter {
+
+// The drift's arithmetic is written once, over a number type T: double for one body, Lanes for four
+// bodies side by side (integrate_positions). Both run the same operations in the same order, none
+// fused (-ffp-contract=off), so four at a time gives the bits of one at a time.
+// GCC reports -Wpsabi (vectors returned by the always-inlined helpers) after the end of the file, so
+// it stays off for the whole of it.
+#pragma GCC diagnostic ignored "-Wpsabi"
+// The vectors live only in the locals of one function (drift_lanes, compiled once per instruction
+// set), never in memory another function reads, so their alignment may follow the instruction set.
+typedef double Lanes __attribute__((vector_size(4 * sizeof(double))));
+typedef long long LaneMask __attribute__((vector_size(4 * sizeof(long long))));
+
 namespace {
+
+template <class T>
+struct V3 {
+  T x, y, z;
+};
+template <class T>
+struct Q4 {
+  T w, x, y, z;
+};
+template <class T>
+struct M3 {
+  T m[3][3];  // row-major
+};
+
+#define SHATTER_INLINE [[gnu::always_inline]] inline
+template <class T>
+SHATTER_INLINE V3<T> operator+(const V3<T>& a, const V3<T>& b) {
+  return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+template <class T>
+SHATTER_INLINE V3<T> operator-(const V3<T>& a, const V3<T>& b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+template <class T, class S>
+SHATTER_INLINE V3<T> operator*(const S& s, const V3<T>& a) {
+  return {s * a.x, s * a.y, s * a.z};
+}
+template <class T>
+SHATTER_INLINE T dot(const V3<T>& a, const V3<T>& b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+template <class T>
+SHATTER_INLINE V3<T> cross(const V3<T>& a, const V3<T>& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+template <class T>
+SHATTER_INLINE V3<T> mul(const M3<T>& m, const V3<T>& v) {
+  return {m.m[0][0] * v.x + m.m[0][1] * v.y + m.m[0][2] * v.z, m.m[1][0] * v.x + m.m[1][1] * v.y + m.m[1][2] * v.z,
+          m.m[2][0] * v.x + m.m[2][1] * v.y + m.m[2][2] * v.z};
+}
+template <class T>
+SHATTER_INLINE V3<T> mul_transposed(const M3<T>& m, const V3<T>& v) {
+  return {m.m[0][0] * v.x + m.m[1][0] * v.y + m.m[2][0] * v.z, m.m[0][1] * v.x + m.m[1][1] * v.y + m.m[2][1] * v.z,
+          m.m[0][2] * v.x + m.m[1][2] * v.y + m.m[2][2] * v.z};
+}
+SHATTER_INLINE double root(double x) { return std::sqrt(x); }
+SHATTER_INLINE Lanes root(const Lanes& x) {
+  return Lanes{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
+}
+template <class T>
+SHATTER_INLINE Q4<T> normalized(const Q4<T>& q) {
+  const T n = root(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
+  return {q.w / n, q.x / n, q.y / n, q.z / n};
+}
+// a * conj(b)
+template <class T>
+SHATTER_INLINE Q4<T> times_conjugate(const Q4<T>& a, const Q4<T>& b) {
+  return {a.w * b.w + a.x * b.x + a.y * b.y + a.z * b.z, -a.w * b.x + b.w * a.x - (a.y * b.z - a.z * b.y),
+          -a.w * b.y + b.w * a.y - (a.z * b.x - a.x * b.z), -a.w * b.z + b.w * a.z - (a.x * b.y - a.y * b.x)};
+}
+// q v q*, as Eigen writes it: v + w (2 u x v) + u x (2 u x v).
+template <class T>
+SHATTER_INLINE V3<T> turn(const Q4<T>& q, const V3<T>& v) {
+  const V3<T> u{q.x, q.y, q.z};
+  V3<T> uv = cross(u, v);
+  uv = uv + uv;
+  return v + q.w * uv + cross(u, uv);
+}
+template <class T>
+SHATTER_INLINE M3<T> rotation_matrix(const Q4<T>& q) {
+  const T tx = q.x + q.x, ty = q.y + q.y, tz = q.z + q.z;
+  const T twx = tx * q.w, twy = ty * q.w, twz = tz * q.w;
+  const T txx = tx * q.x, txy = ty * q.x, txz = tz * q.x;
+  const T tyy = ty * q.y, tyz = tz * q.y, tzz = tz * q.z;
+  const T one = T{} + 1.0;
+  return {{{one - (tyy + tzz), txy - twz, txz + twy},
+           {txy + twz, one - (txx + tzz), tyz - twx},
+           {txz - twy, tyz + twx, one - (txx + tyy)}}};
+}
 
 // The Cayley rotation of the midpoint rule for angular velocity w over dt, as a unit quaternion:
 // L_b' = q L_b solves (I + dt/2 [w]) L_b' = (I - dt/2 [w]) L_b (see integrate.h).
-Quat cayley_step(const Vec3& w, double dt) {
-  const Vec3 b = -0.5 * dt * w;
-  return Quat(1.0, b.x(), b.y(), b.z()).normalized();
+template <class T>
+SHATTER_INLINE Q4<T> cayley_step(const V3<T>& w, double dt) {
+  const V3<T> b = (-0.5 * dt) * w;
+  return normalized(Q4<T>{T{} + 1.0, b.x, b.y, b.z});
 }
 
 // The same rotation applied to v without forming the unit quaternion (no square root): with
 // q = (1, b) / |(1, b)|, q v q* = v + 2 / (1 + b.b) (b x v + b x (b x v)).
-Vec3 cayley_rotate(const Vec3& w, double dt, const Vec3& v) {
-  const Vec3 b = -0.5 * dt * w;
-  const Vec3 bv = b.cross(v);
-  return v + (2.0 / (1.0 + b.squaredNorm())) * (bv + b.cross(bv));
+template <class T>
+SHATTER_INLINE V3<T> cayley_rotate(const V3<T>& w, double dt, const V3<T>& v) {
+  const V3<T> b = (-0.5 * dt) * w;
+  const V3<T> bv = cross(b, v);
+  return v + (2.0 / (1.0 + dot(b, b))) * (bv + cross(b, bv));
+}
+
+// Converged when the change is at most 4 ulp of |w|, compared squared (no square roots).
+constexpr double kTolerance = 16 * std::numeric_limits<double>::epsilon() * std::numeric_limits<double>::epsilon();
+constexpr int kMaxIterations = 200;
+
+// The fixed point's first guess: the midpoint momentum after half an explicit step, L + dt/2 (L x w).
+template <class T>
+SHATTER_INLINE V3<T> first_guess(const M3<T>& inverse_inertia, const V3<T>& l_body, double dt) {
+  const V3<T> w0 = mul(inverse_inertia, l_body);
+  return mul(inverse_inertia, l_body + (0.5 * dt) * cross(l_body, w0));
+}
+// One iteration w -> I_b^-1 (L_b + Q(w) L_b) / 2; `change` gets |w' - w|^2.
+template <class T>
+SHATTER_INLINE V3<T> iterate(const M3<T>& inverse_inertia, const V3<T>& l_body, double dt, const V3<T>& w, T& change) {
+  const V3<T> next = mul(inverse_inertia, 0.5 * (l_body + cayley_rotate(w, dt, l_body)));
+  const V3<T> d = next - w;
+  change = dot(d, d);
+  return next;
+}
+// After the midpoint velocity w: the body momentum and the orientation turned by the Cayley step.
+template <class T>
+SHATTER_INLINE void finish_rotation(const V3<T>& w, double dt, Q4<T>& q, V3<T>& l_body) {
+  const Q4<T> step = cayley_step(w, dt);
+  l_body = turn(step, l_body);
+  q = normalized(times_conjugate(q, step));
 }
 
 // Body-frame midpoint angular velocity of the torque-free step: the fixed point of
 // w = I_b^-1 (L_b + Q(w) L_b) / 2. Returns false when it does not converge (a step too large for
 // the spin; the caller splits it).
-bool midpoint_velocity(const Mat3& inverse_inertia, const Vec3& l_body, double dt, Vec3& w) {
-  // First guess: the midpoint momentum after half an explicit step, L + dt/2 (L x w).
-  const Vec3 w0 = inverse_inertia * l_body;
-  w = inverse_inertia * (l_body + (0.5 * dt) * l_body.cross(w0));
-  // Converged when the change is at most 4 ulp of |w|, compared squared (no square roots).
-  constexpr double kTolerance = 16 * std::numeric_limits<double>::epsilon() * std::numeric_limits<double>::epsilon();
-  for (int it = 0; it < 200; ++it) {
-    const Vec3 next = inverse_inertia * (0.5 * (l_body + cayley_rotate(w, dt, l_body)));
-    const double change = (next - w).squaredNorm();
-    w = next;
-    if (change <= kTolerance * w.squaredNorm()) return true;
+bool midpoint_velocity(const M3<double>& inverse_inertia, const V3<double>& l_body, double dt, V3<double>& w) {
+  w = first_guess(inverse_inertia, l_body, dt);
+  for (int it = 0; it < kMaxIterations; ++it) {
+    double change = 0;
+    w = iterate(inverse_inertia, l_body, dt, w, change);
+    if (change <= kTolerance * dot(w, w)) return true;
   }
   return false;
 }
@@ -46,16 +163,43 @@ bool midpoint_velocity(const Mat3& inverse_inertia, const Vec3& l_body, double d
 // fixed point does not converge at full length. At 2^10 pieces the last iterate is used: the step
 // is still an exact rotation (world angular momentum kept), only the energy is then kept to the
 // iterate's accuracy rather than to 4 ulp.
-void rotate(const Mat3& inverse_inertia, Quat& q, Vec3& l_body, double dt, int depth) {
-  Vec3 w;
+void rotate(const M3<double>& inverse_inertia, Q4<double>& q, V3<double>& l_body, double dt, int depth) {
+  V3<double> w;
   if (!midpoint_velocity(inverse_inertia, l_body, dt, w) && depth < 10) {
     rotate(inverse_inertia, q, l_body, 0.5 * dt, depth + 1);
     rotate(inverse_inertia, q, l_body, 0.5 * dt, depth + 1);
     return;
   }
-  const Quat step = cayley_step(w, dt);
-  l_body = step * l_body;
-  q = (q * step.conjugate()).normalized();
+  finish_rotation(w, dt, q, l_body);
+}
+
+M3<double> to_m3(const Mat3& a) {
+  M3<double> m;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) m.m[i][j] = a(i, j);
+  return m;
+}
+Mat3 to_mat3(const M3<double>& m) {
+  Mat3 a;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) a(i, j) = m.m[i][j];
+  return a;
+}
+V3<double> to_v3(const Vec3& v) { return {v.x(), v.y(), v.z()}; }
+Vec3 to_vec3(const V3<double>& v) { return {v.x, v.y, v.z}; }
+Q4<double> to_q4(const Quat& q) { return {q.w(), q.x(), q.y(), q.z()}; }
+Quat to_quat(const Q4<double>& q) { return {q.w, q.x, q.y, q.z}; }
+
+// The rotation part of integrate_position for a dynamic body with w != 0: from the orientation
+// and world angular velocity to the new ones and the new rotation matrix.
+template <class T>
+SHATTER_INLINE V3<T> body_momentum(const M3<T>& inertia_body, const Q4<T>& q, const V3<T>& w_world) {
+  return mul(inertia_body, mul_transposed(rotation_matrix(q), w_world));
+}
+template <class T>
+SHATTER_INLINE V3<T> world_velocity(const M3<T>& inverse_inertia, const Q4<T>& q, const V3<T>& l_body, M3<T>& turned) {
+  turned = rotation_matrix(q);
+  return mul(turned, mul(inverse_inertia, l_body));
 }
 
 }  // namespace
@@ -101,22 +245,116 @@ void integrate_velocity(const RigidInertia& inertia, RigidState& state, const Ve
 void integrate_position(const RigidInertia& inertia, RigidState& state, double dt, Mat3* rotation) {
   state.position += dt * state.linear_velocity;
   if (state.angular_velocity.squaredNorm() == 0) {
-    if (rotation != nullptr) *rotation = state.orientation.toRotationMatrix();
+    if (rotation != nullptr) *rotation = to_mat3(rotation_matrix(to_q4(state.orientation)));
     return;
   }
   if (inertia.inverse_mass == 0) {  // kinematic: turn at the given (world) angular velocity exactly
     const double angle = dt * state.angular_velocity.norm();
     const Quat turn(Eigen::AngleAxisd(angle, state.angular_velocity.normalized()));
     state.orientation = (turn * state.orientation).normalized();
-    if (rotation != nullptr) *rotation = state.orientation.toRotationMatrix();
+    if (rotation != nullptr) *rotation = to_mat3(rotation_matrix(to_q4(state.orientation)));
     return;
   }
-  const Mat3 R = state.orientation.toRotationMatrix();
-  Vec3 l_body = inertia.inertia_body * (R.transpose() * state.angular_velocity);
-  rotate(inertia.inverse_inertia_body, state.orientation, l_body, dt, 0);
-  const Mat3 turned = state.orientation.toRotationMatrix();
-  state.angular_velocity = turned * (inertia.inverse_inertia_body * l_body);
-  if (rotation != nullptr) *rotation = turned;
+  const M3<double> inverse_inertia = to_m3(inertia.inverse_inertia_body);
+  Q4<double> q = to_q4(state.orientation);
+  V3<double> l_body = body_momentum(to_m3(inertia.inertia_body), q, to_v3(state.angular_velocity));
+  rotate(inverse_inertia, q, l_body, dt, 0);
+  M3<double> turned;
+  state.angular_velocity = to_vec3(world_velocity(inverse_inertia, q, l_body, turned));
+  state.orientation = to_quat(q);
+  if (rotation != nullptr) *rotation = to_mat3(turned);
+}
+
+namespace {
+
+// Four dynamic, spinning bodies at once: integrate_position's rotation part lane by lane, each lane
+// iterating until it converges (converged lanes keep their value). Returns a mask of the lanes whose
+// fixed point did not converge at full length; their outputs are not written.
+SHATTER_INLINE int drift_lanes(std::span<const RigidInertia* const> inertia, std::span<RigidState* const> states,
+                               double dt, std::span<Mat3* const> rotations) {
+  M3<Lanes> inertia_body{}, inverse_inertia{};
+  Q4<Lanes> q{};
+  V3<Lanes> w_world{};
+  const int n = static_cast<int>(states.size());
+  for (int l = 0; l < 4; ++l) {
+    const int k = l < n ? l : 0;  // empty lanes repeat the first body and are not written
+    const RigidInertia& in = *inertia[static_cast<std::size_t>(k)];
+    const RigidState& st = *states[static_cast<std::size_t>(k)];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {
+        inertia_body.m[i][j][l] = in.inertia_body(i, j);
+        inverse_inertia.m[i][j][l] = in.inverse_inertia_body(i, j);
+      }
+    q.w[l] = st.orientation.w();
+    q.x[l] = st.orientation.x();
+    q.y[l] = st.orientation.y();
+    q.z[l] = st.orientation.z();
+    w_world.x[l] = st.angular_velocity.x();
+    w_world.y[l] = st.angular_velocity.y();
+    w_world.z[l] = st.angular_velocity.z();
+  }
+  V3<Lanes> l_body = body_momentum(inertia_body, q, w_world);
+  V3<Lanes> w = first_guess(inverse_inertia, l_body, dt);
+  LaneMask done{};  // all false
+  for (int it = 0; it < kMaxIterations; ++it) {
+    Lanes change;
+    const V3<Lanes> next = iterate(inverse_inertia, l_body, dt, w, change);
+    w.x = done ? w.x : next.x;
+    w.y = done ? w.y : next.y;
+    w.z = done ? w.z : next.z;
+    done = done | (change <= kTolerance * dot(next, next));
+    if (done[0] && done[1] && done[2] && done[3]) break;
+  }
+  finish_rotation(w, dt, q, l_body);
+  M3<Lanes> turned;
+  const V3<Lanes> w_new = world_velocity(inverse_inertia, q, l_body, turned);
+  int failed = 0;
+  for (int l = 0; l < n; ++l) {
+    if (!done[l]) {
+      failed |= 1 << l;
+      continue;
+    }
+    RigidState& st = *states[static_cast<std::size_t>(l)];
+    st.position += dt * st.linear_velocity;
+    st.orientation = Quat(q.w[l], q.x[l], q.y[l], q.z[l]);
+    st.angular_velocity = Vec3(w_new.x[l], w_new.y[l], w_new.z[l]);
+    if (rotations[static_cast<std::size_t>(l)] != nullptr)
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) (*rotations[static_cast<std::size_t>(l)])(i, j) = turned.m[i][j][l];
+  }
+  return failed;
+}
+
+[[gnu::target("avx2")]] int drift_lanes_avx2(std::span<const RigidInertia* const> inertia,
+                                             std::span<RigidState* const> states, double dt,
+                                             std::span<Mat3* const> rotations) {
+  return drift_lanes(inertia, states, dt, rotations);
+}
+int drift_lanes_baseline(std::span<const RigidInertia* const> inertia, std::span<RigidState* const> states, double dt,
+                         std::span<Mat3* const> rotations) {
+  return drift_lanes(inertia, states, dt, rotations);
+}
+
+}  // namespace
+
+void integrate_positions(std::span<const RigidInertia* const> inertia, std::span<RigidState* const> states, double dt,
+                         std::span<Mat3* const> rotations) {
+  SHATTER_CHECK(inertia.size() == states.size() && rotations.size() == states.size() && states.size() <= 4);
+  // Lanes only for dynamic bodies that spin; the others (and lanes whose fixed point must be split)
+  // one at a time, which gives the same bits.
+  bool lanes = !states.empty();
+  for (std::size_t i = 0; i < states.size(); ++i)
+    lanes = lanes && inertia[i]->inverse_mass != 0 && states[i]->angular_velocity.squaredNorm() != 0;
+  int failed = 0;
+  if (!lanes) {
+    failed = (1 << states.size()) - 1;
+  } else {
+    failed = simd_isa() == SimdIsa::avx2 ? drift_lanes_avx2(inertia, states, dt, rotations)
+                                         : drift_lanes_baseline(inertia, states, dt, rotations);
+  }
+  for (std::size_t i = 0; i < states.size(); ++i)
+    if ((failed >> i & 1) != 0) integrate_position(*inertia[i], *states[i], dt, rotations[i]);
 }
 
 }  // namespace shatter
+#undef SHATTER_INLINE

@@ -781,19 +781,34 @@ void World::solve() {
         settings_.parallel_min_bodies);
     contact_batches_.warm_start(solver_bodies_);
     contact_batches_.solve(solver_bodies_, inverse_h, true, settings_.contact.max_push_velocity);
+    // Drift in groups of four bodies (integrate_positions: side by side in vector lanes).
     parallel_for(
-        0, num_moving,
-        [&](std::int64_t k) {
-          const Index i = moving[k];
-          Body& b = bodies_[i];
-          SolverBody& s = solver_bodies_[i];
-          b.rigid.linear_velocity = s.linear_velocity;
-          b.rigid.angular_velocity = s.angular_velocity;
-          integrate_position(b.inertia, b.rigid, h, &s.rotation);
-          s.angular_velocity = b.rigid.angular_velocity;
-          s.position = b.rigid.position;
+        0, (num_moving + 3) / 4,
+        [&](std::int64_t g) {
+          std::array<const RigidInertia*, 4> inertia{};
+          std::array<RigidState*, 4> states{};
+          std::array<Mat3*, 4> rotations{};
+          const std::int64_t first = 4 * g, count = std::min<std::int64_t>(4, num_moving - first);
+          for (std::int64_t k = 0; k < count; ++k) {
+            Body& b = bodies_[moving[first + k]];
+            SolverBody& s = solver_bodies_[moving[first + k]];
+            b.rigid.linear_velocity = s.linear_velocity;
+            b.rigid.angular_velocity = s.angular_velocity;
+            inertia[k] = &b.inertia;
+            states[k] = &b.rigid;
+            rotations[k] = &s.rotation;
+          }
+          const auto size = static_cast<std::size_t>(count);
+          integrate_positions(std::span(inertia.data(), size), std::span(states.data(), size), h,
+                              std::span(rotations.data(), size));
+          for (std::int64_t k = 0; k < count; ++k) {
+            const Body& b = bodies_[moving[first + k]];
+            SolverBody& s = solver_bodies_[moving[first + k]];
+            s.angular_velocity = b.rigid.angular_velocity;
+            s.position = b.rigid.position;
+          }
         },
-        settings_.parallel_min_bodies);
+        settings_.parallel_min_bodies / 4);
     contact_batches_.solve(solver_bodies_, inverse_h, false, settings_.contact.max_push_velocity);
   }
   contact_batches_.store();
