@@ -136,9 +136,6 @@ void solve_contact(ContactConstraint& c, std::span<SolverBody> bodies, double in
 /// threshold and the contact carried load.
 void apply_restitution(ContactConstraint& c, std::span<SolverBody> bodies, double threshold);
 
-/// Current separation of point p of `c` from the bodies' current poses, m.
-double current_separation(const ContactConstraint& c, const ContactPoint& p, std::span<const SolverBody> bodies);
-
 /// Two unit tangents completing unit n to a right-handed frame, continuous in n except at n.z = -1
 /// (Duff et al. 2017, "Building an orthonormal basis, revisited").
 std::array<Vec3, 2> tangent_basis(const Vec3& n);

@@ -173,14 +173,6 @@ void warm_start_contact(ContactConstraint& c, std::span<SolverBody> bodies) {
   c.total_friction_impulse += c.friction_impulse.x() * c.tangents[0] + c.friction_impulse.y() * c.tangents[1];
 }
 
-double current_separation(const ContactConstraint& c, const ContactPoint& p, std::span<const SolverBody> bodies) {
-  const SolverBody& a = bodies[c.body_a];
-  const SolverBody& b = bodies[c.body_b];
-  const Vec3 pa = a.position + a.rotation * p.local_anchor_a;
-  const Vec3 pb = b.position + b.rotation * p.local_anchor_b;
-  return p.separation + (pb - pa).dot(c.normal);
-}
-
 void solve_contact(ContactConstraint& c, std::span<SolverBody> bodies, double inverse_h, bool use_bias,
                    double max_push_velocity) {
   PairMotion m(c, bodies);
