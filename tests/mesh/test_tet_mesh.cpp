@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numeric>
 
+#include "shatter/core/random.h"
 #include "shatter/mesh/generate.h"
 #include "shatter/mesh/quality.h"
 #include "shatter/mesh/topology.h"
@@ -75,6 +77,56 @@ TEST(Topology, NeighborsAreSymmetric) {
       EXPECT_TRUE(back);
     }
   EXPECT_TRUE(f.overshared.empty());
+}
+
+// compute_faces against the definition: faces sorted by their sorted corners, each face's tets in
+// (tet, local) order, seen from the first. On shuffled tets and node numbers, with repeated tets
+// (faces of more than two tets) and degenerate tets (a repeated node).
+TEST(Topology, FacesMatchASortOfEveryFace) {
+  for (int c = 1; c <= 4; ++c) {
+    TetMesh m = make_box_mesh({.cells = {c + 1, c, 3}, .pattern = BoxMeshDef::Pattern::five, .jitter = 0.2});
+    Random rng(static_cast<std::uint64_t>(c));
+    for (std::size_t i = m.tets.size() - 1; i > 0; --i) std::swap(m.tets[i], m.tets[rng.next_u64() % (i + 1)]);
+    std::vector<Index> renumber(m.positions.size());
+    std::iota(renumber.begin(), renumber.end(), Index(0));
+    for (std::size_t i = renumber.size() - 1; i > 0; --i) std::swap(renumber[i], renumber[rng.next_u64() % (i + 1)]);
+    for (TetIndices& t : m.tets)
+      for (Index& v : t) v = renumber[static_cast<std::size_t>(v)];
+    for (int i = 0; i < 4; ++i) m.tets.push_back(m.tets[static_cast<std::size_t>(3 * i)]);
+    m.tets.push_back({m.tets[0][0], m.tets[0][0], m.tets[0][1], m.tets[0][2]});
+    m.tets.push_back({m.tets[1][3], m.tets[1][1], m.tets[1][1], m.tets[1][1]});
+
+    std::map<std::array<Index, 3>, std::vector<std::pair<Index, int>>> by_key;
+    for (Index e = 0; e < m.num_tets(); ++e)
+      for (int k = 0; k < 4; ++k) {
+        std::array<Index, 3> key = {m.tets[e][kTetFaces[k][0]], m.tets[e][kTetFaces[k][1]], m.tets[e][kTetFaces[k][2]]};
+        std::sort(key.begin(), key.end());
+        by_key[key].push_back({e, k});
+      }
+    const TetFaces f = compute_faces(m);
+    ASSERT_EQ(f.faces.size(), by_key.size());
+    std::size_t overshared = 0;
+    Index i = 0;
+    for (const auto& [key, sides] : by_key) {
+      const auto [e0, k0] = sides[0];
+      const TriIndices seen = {m.tets[e0][kTetFaces[k0][0]], m.tets[e0][kTetFaces[k0][1]],
+                               m.tets[e0][kTetFaces[k0][2]]};
+      EXPECT_EQ(f.faces[i], seen);
+      EXPECT_EQ(f.face_tets[i][0], e0);
+      EXPECT_EQ(f.face_tets[i][1], sides.size() > 1 ? sides[1].first : -1);
+      for (std::size_t s = 0; s < sides.size(); ++s) {
+        EXPECT_EQ(f.tet_faces[sides[s].first][sides[s].second], i);
+        if (s >= 2) {
+          ASSERT_LT(overshared, f.overshared.size());
+          EXPECT_EQ(f.overshared[overshared], (std::array<Index, 2>{i, sides[s].first}));
+          ++overshared;
+        }
+      }
+      ++i;
+    }
+    EXPECT_EQ(overshared, f.overshared.size());
+    EXPECT_GT(overshared, 0u);
+  }
 }
 
 // The local query (node incidence) finds the same neighbour as the global face sort, on both box

@@ -8,57 +8,80 @@
 namespace shatter {
 
 TetFaces compute_faces(const TetMesh& mesh) {
+  // Each face is listed under its smallest corner v. The tets with a face there are among v's
+  // incident tets, which node_tets gives in increasing order: walking them, and each tet's faces
+  // in local order, lists v's faces in (tet, local) order without a global sort. A stable sort of
+  // that short list by the other two corners then gives the order of (key, tet, local).
   struct Entry {
-    std::array<Index, 3> key;  // sorted corners
+    std::int64_t key;  // the two larger corners, (b << 32) | c
     Index tet;
     int local;
   };
   const Index nt = mesh.num_tets();
-  // Bucket the 4 nt face entries by their smallest corner (counting sort, stable in (tet, local)
-  // order), then sort each small bucket by the other two corners: same order as sorting by
-  // (key, tet, local), in linear time.
-  const std::size_t nn = mesh.positions.size();
-  std::vector<std::int64_t> start(nn + 1, 0);
-  std::vector<std::array<Index, 3>> keys(static_cast<std::size_t>(nt) * 4);
-  for (Index e = 0; e < nt; ++e)
-    for (int k = 0; k < 4; ++k) {
-      std::array<Index, 3> key = {mesh.tets[e][kTetFaces[k][0]], mesh.tets[e][kTetFaces[k][1]],
-                                  mesh.tets[e][kTetFaces[k][2]]};
-      std::sort(key.begin(), key.end());
-      keys[static_cast<std::size_t>(e) * 4 + static_cast<std::size_t>(k)] = key;
-      ++start[static_cast<std::size_t>(key[0]) + 1];
-    }
-  for (std::size_t v = 0; v < nn; ++v) start[v + 1] += start[v];
-  std::vector<Entry> entries(keys.size());
-  {
-    std::vector<std::int64_t> fill(start.begin(), start.end() - 1);
-    for (Index e = 0; e < nt; ++e)
-      for (int k = 0; k < 4; ++k) {
-        const auto& key = keys[static_cast<std::size_t>(e) * 4 + static_cast<std::size_t>(k)];
-        entries[static_cast<std::size_t>(fill[static_cast<std::size_t>(key[0])]++)] = {key, e, k};
-      }
-  }
-  for (std::size_t v = 0; v < nn; ++v)
-    std::sort(entries.begin() + start[v], entries.begin() + start[v + 1], [](const Entry& a, const Entry& b) {
-      if (a.key[1] != b.key[1]) return a.key[1] < b.key[1];
-      if (a.key[2] != b.key[2]) return a.key[2] < b.key[2];
-      return a.tet != b.tet ? a.tet < b.tet : a.local < b.local;
-    });
+  const NodeTets incidence = node_tets(mesh);
   TetFaces out;
-  out.tet_faces.assign(nt, {-1, -1, -1, -1});
-  for (std::size_t i = 0; i < entries.size();) {
-    std::size_t j = i;
-    while (j < entries.size() && entries[j].key == entries[i].key) ++j;
-    const Index f = static_cast<Index>(out.faces.size());
-    const Entry& first = entries[i];
-    const TetIndices& t = mesh.tets[first.tet];
-    out.faces.push_back({t[kTetFaces[first.local][0]], t[kTetFaces[first.local][1]], t[kTetFaces[first.local][2]]});
-    out.face_tets.push_back({first.tet, j - i > 1 ? entries[i + 1].tet : Index(-1)});
-    for (std::size_t m = i; m < j; ++m) {
-      out.tet_faces[entries[m].tet][entries[m].local] = f;
-      if (m >= i + 2) out.overshared.push_back({f, entries[m].tet});
+  out.tet_faces.assign(static_cast<std::size_t>(nt), {-1, -1, -1, -1});
+  // A closed mesh has 2 nt + (boundary faces) / 2 faces.
+  out.faces.reserve(2 * static_cast<std::size_t>(nt) + 64);
+  out.face_tets.reserve(2 * static_cast<std::size_t>(nt) + 64);
+  std::vector<Entry> bucket;
+  auto list = [&](Index b, Index c, Index e, int k) {
+    bucket.push_back({(static_cast<std::int64_t>(b) << 32) | static_cast<std::uint32_t>(c), e, k});
+  };
+  for (Index v = 0; v < mesh.num_nodes(); ++v) {
+    bucket.clear();
+    Index previous = -1;
+    for (const Index e : incidence.of(v)) {
+      if (e == previous) continue;  // a degenerate tet lists v twice
+      previous = e;
+      const TetIndices& t = mesh.tets[e];
+      if (t[0] == t[1] || t[0] == t[2] || t[0] == t[3] || t[1] == t[2] || t[1] == t[3] || t[2] == t[3]) {
+        // A degenerate tet (a repeated node): each face's sorted corners.
+        for (int k = 0; k < 4; ++k) {
+          std::array<Index, 3> key = {t[kTetFaces[k][0]], t[kTetFaces[k][1]], t[kTetFaces[k][2]]};
+          std::sort(key.begin(), key.end());
+          if (key[0] == v) list(key[1], key[2], e, k);
+        }
+        continue;
+      }
+      // v is the smallest corner of the faces opposite the corners k with every corner other than
+      // k and v's own above v; each face is listed under one corner only.
+      for (int k = 0; k < 4; ++k) {
+        if (t[k] == v) continue;
+        Index b = -1, c = -1;  // the face's corners other than v, b <= c
+        bool owned = true;
+        for (int i = 0; i < 4 && owned; ++i) {
+          if (i == k || t[i] == v) continue;
+          owned = t[i] > v;
+          if (b < 0)
+            b = t[i];
+          else
+            c = t[i];
+        }
+        if (owned) list(std::min(b, c), std::max(b, c), e, k);
+      }
     }
-    i = j;
+    // Insertion sort: stable, and the lists are short (a node's share of its tets' faces).
+    for (std::size_t i = 1; i < bucket.size(); ++i) {
+      const Entry x = bucket[i];
+      std::size_t j = i;
+      for (; j > 0 && bucket[j - 1].key > x.key; --j) bucket[j] = bucket[j - 1];
+      bucket[j] = x;
+    }
+    for (std::size_t i = 0; i < bucket.size();) {
+      std::size_t j = i;
+      while (j < bucket.size() && bucket[j].key == bucket[i].key) ++j;
+      const Index f = static_cast<Index>(out.faces.size());
+      const Entry& first = bucket[i];
+      const TetIndices& t = mesh.tets[first.tet];
+      out.faces.push_back({t[kTetFaces[first.local][0]], t[kTetFaces[first.local][1]], t[kTetFaces[first.local][2]]});
+      out.face_tets.push_back({first.tet, j - i > 1 ? bucket[i + 1].tet : Index(-1)});
+      for (std::size_t m = i; m < j; ++m) {
+        out.tet_faces[bucket[m].tet][bucket[m].local] = f;
+        if (m >= i + 2) out.overshared.push_back({f, bucket[m].tet});
+      }
+      i = j;
+    }
   }
   return out;
 }
