@@ -11,6 +11,7 @@
 #include "shatter/fem/material.h"
 #include "shatter/fracture/fracture.h"
 #include "shatter/mesh/generate.h"
+#include "shatter/mesh/topology.h"
 
 namespace shatter {
 namespace {
@@ -21,6 +22,7 @@ struct Setup {
   std::vector<TetStress> stress;
   Material material;
   FemModel model;
+  TetFaces faces;  // as a body keeps them
 };
 
 /// A bar of about `tets` tets with a bending-like stress field peaking at mid-span on the bottom.
@@ -34,6 +36,7 @@ const Setup& setup(std::int64_t tets) {
   s.deformed = s.mesh.positions;
   s.material = material_preset("glass").value();
   s.model = make_fem_model(s.mesh, s.material, ModelKind::stvk);
+  s.faces = compute_faces(s.mesh);
   std::vector<Mat3> sigma;
   for (Index e = 0; e < s.mesh.num_tets(); ++e) {
     const Vec3 c = s.mesh.corners(e).rowwise().mean();
@@ -49,6 +52,7 @@ void BM_FractureGivenStress(benchmark::State& state) {
   FractureOptions options;
   options.crack.max_cracks = static_cast<int>(state.range(1));
   options.crack.radius_fraction = 0.2;
+  if (state.range(2) != 0) options.faces = &s.faces;
   std::size_t fragments = 0;
   for (auto _ : state) {
     const FractureResult r = fracture_with_stress(s.mesh, s.model, s.deformed, s.stress, options);
@@ -58,7 +62,14 @@ void BM_FractureGivenStress(benchmark::State& state) {
   state.counters["tets"] = static_cast<double>(s.mesh.num_tets());
   state.counters["fragments"] = static_cast<double>(fragments);
 }
-BENCHMARK(BM_FractureGivenStress)->Args({4000, 1})->Args({40000, 1})->Args({40000, 4})->Unit(benchmark::kMillisecond);
+// Args: tets, cracks, whether the body's faces are given (as a world's body keeps them).
+BENCHMARK(BM_FractureGivenStress)
+    ->Args({4000, 1, 0})
+    ->Args({40000, 1, 0})
+    ->Args({40000, 4, 0})
+    ->Args({40000, 1, 1})
+    ->Args({40000, 4, 1})
+    ->Unit(benchmark::kMillisecond);
 
 void BM_PlanCracks(benchmark::State& state) {
   const Setup& s = setup(state.range(0));

@@ -8,6 +8,7 @@
 #include "shatter/fem/material.h"
 #include "shatter/fracture/crack.h"
 #include "shatter/mesh/generate.h"
+#include "shatter/mesh/topology.h"
 #include "support/test_support.h"
 
 namespace shatter {
@@ -105,6 +106,31 @@ TEST(PlanCracks, RegionDoesNotJumpGaps) {
   const auto plans = plan_cracks(a, stress, mat, {.brittleness = 10, .max_cracks = 1});
   ASSERT_EQ(plans.size(), 1u);
   for (Index e : plans[0].tets) EXPECT_LT(e, t);
+}
+
+// Regions found in the body's face table are those found by searching the node incidence, small
+// (sorted) and spanning most of the mesh (scanned in order), branching or not.
+TEST(PlanCracks, TheFaceTableGivesTheSameRegions) {
+  const TetMesh m = make_box_mesh({.max = Vec3(4, 1, 1), .cells = {12, 3, 3}, .jitter = 0.2});
+  const TetFaces faces = compute_faces(m);
+  const Material mat = test_material(1e6);
+  const auto stress = uniaxial(m, Vec3::UnitX(), [](const Vec3& c) { return 1.5e6 - 0.2e6 * std::abs(c.x() - 1.3); });
+  for (const bool branch : {false, true})
+    for (const double fraction : {0.05, 1.0}) {
+      const CrackOptions options{.brittleness = 4, .radius_fraction = fraction, .max_cracks = 3, .branch = branch};
+      const std::vector<CrackPlan> searched = plan_cracks(m, stress, mat, options);
+      const std::vector<CrackPlan> tabled = plan_cracks(m, stress, mat, options, {}, {}, &faces);
+      ASSERT_EQ(searched.size(), tabled.size());
+      ASSERT_GE(searched.size(), branch || fraction < 1 ? 2u : 1u);  // one region may take the whole bar
+      for (std::size_t k = 0; k < searched.size(); ++k) {
+        EXPECT_EQ(searched[k].origin_tet, tabled[k].origin_tet);
+        EXPECT_EQ(searched[k].tets, tabled[k].tets);
+        EXPECT_TRUE(std::is_sorted(tabled[k].tets.begin(), tabled[k].tets.end()));
+      }
+      if (fraction == 1.0) {
+        EXPECT_GT(searched[0].tets.size() * 16, m.tets.size());
+      }
+    }
 }
 
 TEST(PlanCracks, PerTetStrengthPicksTheWeakestTetFirst) {

@@ -81,10 +81,11 @@ std::vector<Index> crack_region(const TetMesh& mesh, const NodeTets& incidence, 
 /// `ductile_origins` (tets over the maximum plastic strain) come first, with radius r_min.
 /// `tet_strength` gives each tet its own tensile strength (Pa, #tets; empty: the material's): a tet
 /// cracks when its stress exceeds its strength, origins are taken by decreasing stress over strength,
-/// and the crack radius follows the origin's own excess.
+/// and the crack radius follows the origin's own excess. `faces` (compute_faces of `mesh`, or null),
+/// when the caller keeps them, gives the regions' face neighbours without searching the incidence.
 std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStress>& stress, const Material& material,
                                    const CrackOptions& options = {}, const std::vector<Index>& ductile_origins = {},
-                                   const std::vector<double>& tet_strength = {});
+                                   const std::vector<double>& tet_strength = {}, const TetFaces* faces = nullptr);
 
 /// Exponentially time-averaged stress per tet: sigma_avg += (1 - exp(-dt / tau)) (sigma - sigma_avg).
 /// A stress must persist for about tau to count fully, so a one-step spike does not crack a body

@@ -25,6 +25,9 @@ struct FractureOptions {
   /// Tensile strength per tet of the rest mesh, Pa (empty: the material's; see
   /// sample_tensile_strengths).
   std::vector<double> tensile_strength;
+  /// The rest mesh's faces (compute_faces; the same tets), when the caller keeps them: the cracks
+  /// planned on the rest mesh then find their regions' neighbours in it. Null: searched.
+  const TetFaces* faces = nullptr;
 };
 
 /// One crack: its plan (origin, normal, radius, region in the mesh it was planned on) and what the

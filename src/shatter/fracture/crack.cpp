@@ -59,39 +59,65 @@ double crack_radius(double stress, double strength, double brittleness, double r
 
 namespace {
 
-// The face neighbours of a mesh's tets as they are asked for (face_neighbor), each found once:
-// several crack regions of one mesh overlap.
+// The face neighbours of a mesh's tets as they are asked for, each found once (several crack regions
+// of one mesh overlap): from the mesh's face table when the caller has one, else by face_neighbor
+// on the node incidence, built at the first question.
 class FaceNeighbors {
  public:
-  FaceNeighbors(const TetMesh& mesh, const NodeTets& incidence)
-      : mesh_(mesh), incidence_(incidence), known_(mesh.tets.size(), {kUnknown, kUnknown, kUnknown, kUnknown}) {}
+  FaceNeighbors(const TetMesh& mesh, const NodeTets* incidence, const TetFaces* faces)
+      : mesh_(mesh), incidence_(incidence), faces_(faces) {
+    // The table's neighbour of a face shared by three or more tets may differ from face_neighbor's:
+    // such meshes keep the search.
+    if (faces_ != nullptr && !faces_->overshared.empty()) faces_ = nullptr;
+    if (faces_ == nullptr) known_.assign(mesh.tets.size(), {kUnknown, kUnknown, kUnknown, kUnknown});
+  }
   Index operator()(Index e, int k) {
+    if (faces_ != nullptr) return faces_->neighbor(e, k);
     Index& n = known_[static_cast<std::size_t>(e)][static_cast<std::size_t>(k)];
-    if (n == kUnknown) n = face_neighbor(mesh_, incidence_, e, k);
+    if (n == kUnknown) {
+      if (incidence_ == nullptr) {
+        own_incidence_ = node_tets(mesh_);
+        incidence_ = &own_incidence_;
+      }
+      n = face_neighbor(mesh_, *incidence_, e, k);
+    }
     return n;
   }
 
  private:
   static constexpr Index kUnknown = -2;  // face_neighbor gives a tet or -1
   const TetMesh& mesh_;
-  const NodeTets& incidence_;
+  const NodeTets* incidence_;
+  const TetFaces* faces_;
+  NodeTets own_incidence_;
   std::vector<std::array<Index, 4>> known_;
 };
 
 std::vector<Index> grow_region(const TetMesh& mesh, FaceNeighbors& neighbors, Index origin_tet, const Vec3& center,
                                double radius) {
+  // seen: 1 looked at, 2 in the region.
   std::vector<char> seen(mesh.tets.size(), 0);
   std::vector<Index> out{origin_tet};
-  seen[origin_tet] = 1;
+  seen[origin_tet] = 2;
   const double r2 = radius * radius;
   for (std::size_t i = 0; i < out.size(); ++i)
     for (int k = 0; k < 4; ++k) {
       const Index n = neighbors(out[i], k);
       if (n < 0 || seen[n]) continue;
       seen[n] = 1;
-      if ((centroid(mesh, n) - center).squaredNorm() <= r2) out.push_back(n);
+      if ((centroid(mesh, n) - center).squaredNorm() <= r2) {
+        seen[n] = 2;
+        out.push_back(n);
+      }
     }
-  std::sort(out.begin(), out.end());
+  // In increasing order: a sort when the region is a small part of the mesh, else a scan.
+  if (out.size() * 16 < mesh.tets.size()) {
+    std::sort(out.begin(), out.end());
+  } else {
+    std::size_t j = 0;
+    for (Index e = 0; e < mesh.num_tets(); ++e)
+      if (seen[e] == 2) out[j++] = e;
+  }
   return out;
 }
 
@@ -99,13 +125,13 @@ std::vector<Index> grow_region(const TetMesh& mesh, FaceNeighbors& neighbors, In
 
 std::vector<Index> crack_region(const TetMesh& mesh, const NodeTets& incidence, Index origin_tet, const Vec3& center,
                                 double radius) {
-  FaceNeighbors neighbors(mesh, incidence);
+  FaceNeighbors neighbors(mesh, &incidence, nullptr);
   return grow_region(mesh, neighbors, origin_tet, center, radius);
 }
 
 std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStress>& stress, const Material& material,
                                    const CrackOptions& options, const std::vector<Index>& ductile_origins,
-                                   const std::vector<double>& tet_strength) {
+                                   const std::vector<double>& tet_strength, const TetFaces* faces) {
   SHATTER_CHECK(stress.size() == mesh.tets.size());
   SHATTER_CHECK(tet_strength.empty() || tet_strength.size() == mesh.tets.size());
   std::vector<CrackPlan> plans;
@@ -139,8 +165,8 @@ std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStr
   });
   if (over.empty() && ductile_origins.empty()) return plans;
 
-  const NodeTets incidence = node_tets(mesh);
-  FaceNeighbors neighbors(mesh, incidence);  // shared by the plans' regions
+  SHATTER_CHECK(faces == nullptr || faces->tet_faces.size() == mesh.tets.size());
+  FaceNeighbors neighbors(mesh, nullptr, faces);  // shared by the plans' regions
   std::vector<char> taken(mesh.tets.size(), 0);
   auto consider = [&](Index e, bool ductile) {
     if (static_cast<int>(plans.size()) >= options.max_cracks || (taken[e] && !options.branch)) return;

@@ -31,7 +31,7 @@ FractureResult fracture_with_stress(const TetMesh& rest, const FemModel& model, 
   std::iota(r.tet_parent.begin(), r.tet_parent.end(), Index(0));
 
   const std::vector<CrackPlan> plans =
-      plan_cracks(r.mesh, r.stress, material, options.crack, r.plastic.failed, options.tensile_strength);
+      plan_cracks(r.mesh, r.stress, material, options.crack, r.plastic.failed, options.tensile_strength, options.faces);
   for (std::size_t k = 0; k < plans.size(); ++k) {
     CrackEvent ev;
     ev.plan = plans[k];

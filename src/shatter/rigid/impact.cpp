@@ -395,6 +395,7 @@ Result<void> respond(const BodyModel& model, BodyState& state, const std::vector
   FractureOptions options = fo;
   options.plastic_strain = result.plastic_strain;
   options.tensile_strength = state.tensile_strength;
+  options.faces = &model.faces;
   FractureResult fr = fracture_with_stress(model.mesh, model.fem, x, std::move(stress), options);
   result.cracks = fr.events;
   result.dented = !fr.plastic.moved_nodes.empty();
