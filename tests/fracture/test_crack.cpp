@@ -119,7 +119,8 @@ TEST(PlanCracks, TheFaceTableGivesTheSameRegions) {
     for (const double fraction : {0.05, 1.0}) {
       const CrackOptions options{.brittleness = 4, .radius_fraction = fraction, .max_cracks = 3, .branch = branch};
       const std::vector<CrackPlan> searched = plan_cracks(m, stress, mat, options);
-      const std::vector<CrackPlan> tabled = plan_cracks(m, stress, mat, options, {}, {}, &faces);
+      FaceNeighborTable known = face_neighbor_table(faces);
+      const std::vector<CrackPlan> tabled = plan_cracks(m, stress, mat, options, {}, {}, &known);
       ASSERT_EQ(searched.size(), tabled.size());
       ASSERT_GE(searched.size(), branch || fraction < 1 ? 2u : 1u);  // one region may take the whole bar
       for (std::size_t k = 0; k < searched.size(); ++k) {
@@ -131,6 +132,34 @@ TEST(PlanCracks, TheFaceTableGivesTheSameRegions) {
         EXPECT_GT(searched[0].tets.size() * 16, m.tets.size());
       }
     }
+}
+
+// Neighbours carried through a cut are the cut mesh's own (face_neighbor), for most tets; a region
+// grown in them is the one grown by searching.
+TEST(CrackRegion, NeighborsCarriedThroughACutAreTheCutMeshs) {
+  const TetMesh m = make_box_mesh({.max = Vec3(4, 1, 1), .cells = {12, 3, 3}, .jitter = 0.2});
+  const FaceNeighborTable before = face_neighbor_table(compute_faces(m));
+  std::vector<Index> region;
+  for (Index e = 0; e < m.num_tets(); ++e)
+    if (m.corners(e).row(0).mean() > 1.0 && m.corners(e).row(0).mean() < 3.0) region.push_back(e);
+  const CutResult cut = cut_mesh(m, {.point = Vec3(2.05, 0.5, 0.5), .normal = Vec3(1, 0.3, 0.1).normalized()}, region);
+  ASSERT_GT(cut.tets_split, 0);
+  ASSERT_GT(cut.faces_cut, 0);
+  FaceNeighborTable carried = carry_face_neighbors(m, before, cut);
+  const NodeTets incidence = node_tets(cut.mesh);
+  std::size_t known = 0;
+  for (Index e = 0; e < cut.mesh.num_tets(); ++e)
+    for (int k = 0; k < 4; ++k) {
+      if (carried[e][k] == kUnknownNeighbor) continue;
+      ++known;
+      EXPECT_EQ(carried[e][k], face_neighbor(cut.mesh, incidence, e, k)) << "tet " << e << " face " << k;
+    }
+  EXPECT_GT(known, 4 * cut.mesh.tets.size() / 2);
+  EXPECT_LT(known, 4 * cut.mesh.tets.size());
+  const Vec3 centre(2.5, 0.5, 0.5);
+  const Index origin = cut.mesh.num_tets() - 1;
+  EXPECT_EQ(crack_region(cut.mesh, carried, origin, centre, 1.5),
+            crack_region(cut.mesh, incidence, origin, centre, 1.5));
 }
 
 TEST(PlanCracks, PerTetStrengthPicksTheWeakestTetFirst) {

@@ -3,11 +3,13 @@
 // less instantaneous criterion.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
 #include "shatter/core/types.h"
 #include "shatter/fem/material.h"
+#include "shatter/fracture/cut.h"
 #include "shatter/fracture/stress.h"
 #include "shatter/mesh/tet_mesh.h"
 #include "shatter/mesh/topology.h"
@@ -71,9 +73,30 @@ std::vector<double> sample_tensile_strengths(const TetMesh& mesh, const Material
 /// r_frac rule (see CrackOptions).
 double crack_radius(double stress, double strength, double brittleness, double r0, double r_min);
 
+/// Face neighbours of a mesh's tets: [e][k] is the tet across local face k of tet e (opposite
+/// corner k), -1 on the boundary, or kUnknownNeighbor where not known yet. The crack functions
+/// search the unknown ones they need (face_neighbor on the node incidence) and write them in.
+using FaceNeighborTable = std::vector<std::array<Index, 4>>;
+inline constexpr Index kUnknownNeighbor = -2;
+
+/// A table with every neighbour unknown (#tets).
+FaceNeighborTable unknown_face_neighbors(Index num_tets);
+/// The table of a mesh's face table (compute_faces): all known, except at faces of three or more
+/// tets (which face_neighbor settles).
+FaceNeighborTable face_neighbor_table(const TetFaces& faces);
+/// The table of a cut mesh from its input's (`input_known`, #tets of `input`): a tet the cut left as
+/// it was (its index, and its corners or their copies) keeps its boundary faces and each neighbour
+/// that was left as it was too and still shares the face; everything else is unknown. Exact for
+/// meshes whose faces have at most two tets (validate_mesh's condition).
+FaceNeighborTable carry_face_neighbors(const TetMesh& input, const FaceNeighborTable& input_known,
+                                       const CutResult& cut);
+
 /// Tets reachable from `origin_tet` through shared faces with centroids within `radius` of `center`
 /// (sorted). The origin tet is always included.
 std::vector<Index> crack_region(const TetMesh& mesh, const NodeTets& incidence, Index origin_tet, const Vec3& center,
+                                double radius);
+/// The same with the neighbours `known` (#tets), completed as the region needs.
+std::vector<Index> crack_region(const TetMesh& mesh, FaceNeighborTable& known, Index origin_tet, const Vec3& center,
                                 double radius);
 
 /// Plan up to max_cracks cracks: origins are tets whose largest principal stress exceeds the
@@ -81,11 +104,12 @@ std::vector<Index> crack_region(const TetMesh& mesh, const NodeTets& incidence, 
 /// `ductile_origins` (tets over the maximum plastic strain) come first, with radius r_min.
 /// `tet_strength` gives each tet its own tensile strength (Pa, #tets; empty: the material's): a tet
 /// cracks when its stress exceeds its strength, origins are taken by decreasing stress over strength,
-/// and the crack radius follows the origin's own excess. `faces` (compute_faces of `mesh`, or null),
-/// when the caller keeps them, gives the regions' face neighbours without searching the incidence.
+/// and the crack radius follows the origin's own excess. `known` (or null: none known) gives the
+/// regions' face neighbours as far as the caller knows them (face_neighbor_table of a body's faces),
+/// and receives those searched.
 std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStress>& stress, const Material& material,
                                    const CrackOptions& options = {}, const std::vector<Index>& ductile_origins = {},
-                                   const std::vector<double>& tet_strength = {}, const TetFaces* faces = nullptr);
+                                   const std::vector<double>& tet_strength = {}, FaceNeighborTable* known = nullptr);
 
 /// Exponentially time-averaged stress per tet: sigma_avg += (1 - exp(-dt / tau)) (sigma - sigma_avg).
 /// A stress must persist for about tau to count fully, so a one-step spike does not crack a body

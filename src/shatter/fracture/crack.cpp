@@ -59,22 +59,17 @@ double crack_radius(double stress, double strength, double brittleness, double r
 
 namespace {
 
-// The face neighbours of a mesh's tets as they are asked for, each found once (several crack regions
-// of one mesh overlap): from the mesh's face table when the caller has one, else by face_neighbor
-// on the node incidence, built at the first question.
+// The face neighbours of a mesh's tets as they are asked for: from `known`, else by face_neighbor
+// on the node incidence (built at the first search), written into `known`.
 class FaceNeighbors {
  public:
-  FaceNeighbors(const TetMesh& mesh, const NodeTets* incidence, const TetFaces* faces)
-      : mesh_(mesh), incidence_(incidence), faces_(faces) {
-    // The table's neighbour of a face shared by three or more tets may differ from face_neighbor's:
-    // such meshes keep the search.
-    if (faces_ != nullptr && !faces_->overshared.empty()) faces_ = nullptr;
-    if (faces_ == nullptr) known_.assign(mesh.tets.size(), {kUnknown, kUnknown, kUnknown, kUnknown});
+  FaceNeighbors(const TetMesh& mesh, FaceNeighborTable& known, const NodeTets* incidence = nullptr)
+      : mesh_(mesh), known_(known), incidence_(incidence) {
+    SHATTER_CHECK(known.size() == mesh.tets.size());
   }
   Index operator()(Index e, int k) {
-    if (faces_ != nullptr) return faces_->neighbor(e, k);
     Index& n = known_[static_cast<std::size_t>(e)][static_cast<std::size_t>(k)];
-    if (n == kUnknown) {
+    if (n == kUnknownNeighbor) {
       if (incidence_ == nullptr) {
         own_incidence_ = node_tets(mesh_);
         incidence_ = &own_incidence_;
@@ -85,12 +80,10 @@ class FaceNeighbors {
   }
 
  private:
-  static constexpr Index kUnknown = -2;  // face_neighbor gives a tet or -1
   const TetMesh& mesh_;
+  FaceNeighborTable& known_;
   const NodeTets* incidence_;
-  const TetFaces* faces_;
   NodeTets own_incidence_;
-  std::vector<std::array<Index, 4>> known_;
 };
 
 std::vector<Index> grow_region(const TetMesh& mesh, FaceNeighbors& neighbors, Index origin_tet, const Vec3& center,
@@ -123,15 +116,80 @@ std::vector<Index> grow_region(const TetMesh& mesh, FaceNeighbors& neighbors, In
 
 }  // namespace
 
+FaceNeighborTable unknown_face_neighbors(Index num_tets) {
+  return FaceNeighborTable(static_cast<std::size_t>(num_tets),
+                           {kUnknownNeighbor, kUnknownNeighbor, kUnknownNeighbor, kUnknownNeighbor});
+}
+
+FaceNeighborTable face_neighbor_table(const TetFaces& faces) {
+  FaceNeighborTable table(faces.tet_faces.size());
+  for (std::size_t e = 0; e < table.size(); ++e)
+    for (int k = 0; k < 4; ++k) table[e][k] = faces.neighbor(static_cast<Index>(e), k);
+  // A face of three or more tets: which of the others face_neighbor names depends on the incidence.
+  if (!faces.overshared.empty()) {
+    std::vector<char> shared_by_more(faces.faces.size(), 0);
+    for (const auto& [f, tet] : faces.overshared) shared_by_more[static_cast<std::size_t>(f)] = 1;
+    for (std::size_t e = 0; e < table.size(); ++e)
+      for (int k = 0; k < 4; ++k)
+        if (shared_by_more[static_cast<std::size_t>(faces.tet_faces[e][k])]) table[e][k] = kUnknownNeighbor;
+  }
+  return table;
+}
+
+FaceNeighborTable carry_face_neighbors(const TetMesh& input, const FaceNeighborTable& input_known,
+                                       const CutResult& cut) {
+  SHATTER_CHECK(input_known.size() == input.tets.size());
+  const TetMesh& mesh = cut.mesh;
+  FaceNeighborTable table = unknown_face_neighbors(mesh.num_tets());
+  // Left as it was: the same index, each corner the input's or a copy of it.
+  const Index n_input = std::min(input.num_tets(), mesh.num_tets());
+  std::vector<char> kept(static_cast<std::size_t>(n_input), 0);
+  for (Index e = 0; e < n_input; ++e) {
+    bool same = cut.tet_parent[e] == e;
+    for (int c = 0; c < 4 && same; ++c) {
+      const NodeOrigin& o = cut.node_origin[mesh.tets[e][c]];
+      same = o.a == o.b && o.a == input.tets[e][c];
+    }
+    kept[e] = same ? 1 : 0;
+  }
+  for (Index e = 0; e < n_input; ++e) {
+    if (!kept[e]) continue;
+    const TetIndices& t = mesh.tets[e];
+    for (int k = 0; k < 4; ++k) {
+      const Index n = input_known[e][k];
+      if (n == -1) {
+        table[e][k] = -1;  // a cut opens faces, it never closes one
+        continue;
+      }
+      if (n < 0 || n >= n_input || !kept[n]) continue;
+      const TetIndices& u = mesh.tets[n];
+      bool shares = true;
+      for (int j = 0; j < 3 && shares; ++j) {
+        const Index v = t[kTetFaces[k][j]];
+        shares = u[0] == v || u[1] == v || u[2] == v || u[3] == v;
+      }
+      if (shares) table[e][k] = n;
+    }
+  }
+  return table;
+}
+
 std::vector<Index> crack_region(const TetMesh& mesh, const NodeTets& incidence, Index origin_tet, const Vec3& center,
                                 double radius) {
-  FaceNeighbors neighbors(mesh, &incidence, nullptr);
+  FaceNeighborTable known = unknown_face_neighbors(mesh.num_tets());
+  FaceNeighbors neighbors(mesh, known, &incidence);
+  return grow_region(mesh, neighbors, origin_tet, center, radius);
+}
+
+std::vector<Index> crack_region(const TetMesh& mesh, FaceNeighborTable& known, Index origin_tet, const Vec3& center,
+                                double radius) {
+  FaceNeighbors neighbors(mesh, known);
   return grow_region(mesh, neighbors, origin_tet, center, radius);
 }
 
 std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStress>& stress, const Material& material,
                                    const CrackOptions& options, const std::vector<Index>& ductile_origins,
-                                   const std::vector<double>& tet_strength, const TetFaces* faces) {
+                                   const std::vector<double>& tet_strength, FaceNeighborTable* known) {
   SHATTER_CHECK(stress.size() == mesh.tets.size());
   SHATTER_CHECK(tet_strength.empty() || tet_strength.size() == mesh.tets.size());
   std::vector<CrackPlan> plans;
@@ -165,8 +223,12 @@ std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStr
   });
   if (over.empty() && ductile_origins.empty()) return plans;
 
-  SHATTER_CHECK(faces == nullptr || faces->tet_faces.size() == mesh.tets.size());
-  FaceNeighbors neighbors(mesh, nullptr, faces);  // shared by the plans' regions
+  FaceNeighborTable own;
+  if (known == nullptr) {
+    own = unknown_face_neighbors(mesh.num_tets());
+    known = &own;
+  }
+  FaceNeighbors neighbors(mesh, *known);  // shared by the plans' regions
   std::vector<char> taken(mesh.tets.size(), 0);
   auto consider = [&](Index e, bool ductile) {
     if (static_cast<int>(plans.size()) >= options.max_cracks || (taken[e] && !options.branch)) return;

@@ -30,15 +30,25 @@ FractureResult fracture_with_stress(const TetMesh& rest, const FemModel& model, 
   r.tet_parent.resize(rest.tets.size());
   std::iota(r.tet_parent.begin(), r.tet_parent.end(), Index(0));
 
+  // Face neighbours of the mesh being cut, carried from cut to cut (below): each crack's region
+  // grows in them, searching only what they do not know.
+  SHATTER_CHECK(options.faces == nullptr || options.faces->tet_faces.size() == rest.tets.size());
+  FaceNeighborTable known =
+      options.faces != nullptr ? face_neighbor_table(*options.faces) : unknown_face_neighbors(rest.num_tets());
   const std::vector<CrackPlan> plans =
-      plan_cracks(r.mesh, r.stress, material, options.crack, r.plastic.failed, options.tensile_strength, options.faces);
+      plan_cracks(r.mesh, r.stress, material, options.crack, r.plastic.failed, options.tensile_strength, &known);
   for (std::size_t k = 0; k < plans.size(); ++k) {
     CrackEvent ev;
     ev.plan = plans[k];
     const std::vector<Index> region =
-        k == 0 ? plans[k].tets
-               : crack_region(r.mesh, node_tets(r.mesh), plans[k].origin_tet, plans[k].origin, plans[k].radius);
+        k == 0 ? plans[k].tets : crack_region(r.mesh, known, plans[k].origin_tet, plans[k].origin, plans[k].radius);
     const CutResult cut = cut_mesh(r.mesh, {.point = plans[k].origin, .normal = plans[k].normal}, region, options.cut);
+    // Carrying the neighbours costs a pass over the mesh (about 16 ns a tet here); searching them,
+    // about 100 ns per tet of the next region. Carried when the next crack's planned region is
+    // over an eighth of the mesh; the same neighbours either way.
+    if (k + 1 < plans.size())
+      known = plans[k + 1].tets.size() * 8 >= r.mesh.tets.size() ? carry_face_neighbors(r.mesh, known, cut)
+                                                                 : unknown_face_neighbors(cut.mesh.num_tets());
     ev.tets_marked = static_cast<Index>(region.size());
     ev.tets_split = cut.tets_split;
     ev.edge_nodes = cut.edge_nodes;
