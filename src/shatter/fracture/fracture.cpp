@@ -2,6 +2,7 @@
 #include "shatter/fracture/fracture.h"
 
 #include <numeric>
+#include <utility>
 
 #include "shatter/core/assert.h"
 #include "shatter/mesh/topology.h"
@@ -42,7 +43,7 @@ FractureResult fracture_with_stress(const TetMesh& rest, const FemModel& model, 
     ev.plan = plans[k];
     const std::vector<Index> region =
         k == 0 ? plans[k].tets : crack_region(r.mesh, known, plans[k].origin_tet, plans[k].origin, plans[k].radius);
-    const CutResult cut = cut_mesh(r.mesh, {.point = plans[k].origin, .normal = plans[k].normal}, region, options.cut);
+    CutResult cut = cut_mesh(r.mesh, {.point = plans[k].origin, .normal = plans[k].normal}, region, options.cut);
     // Carrying the neighbours costs a pass over the mesh (about 16 ns a tet here); searching them,
     // about 100 ns per tet of the next region. Carried when the next crack's planned region is
     // over an eighth of the mesh; the same neighbours either way.
@@ -68,7 +69,7 @@ FractureResult fracture_with_stress(const TetMesh& rest, const FemModel& model, 
       tp[e] = r.tet_parent[cut.tet_parent[e]];
       ps[e] = r.plastic_strain[cut.tet_parent[e]];
     }
-    r.mesh = cut.mesh;
+    r.mesh = std::move(cut.mesh);
     r.deformed = std::move(x);
     r.node_parent = std::move(np);
     r.tet_parent = std::move(tp);
