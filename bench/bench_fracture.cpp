@@ -1,5 +1,5 @@
 // Crack planning + cutting + fragment extraction for a given stress field (the cost of fracture
-// beyond the static solve), at 4k and 40k tets.
+// beyond the static solve), at 4k and 40k tets; and the face table every new body builds.
 #include <benchmark/benchmark.h>
 
 #include "bench_main.h"
@@ -95,6 +95,13 @@ void BM_ExtractFragments(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(extract_fragments(s.mesh, 2500.0).size());
 }
 BENCHMARK(BM_ExtractFragments)->Arg(4000)->Arg(40000)->Unit(benchmark::kMillisecond);
+
+// The face table (compute_faces) a body keeps and each fragment's model rebuilds.
+void BM_ComputeFaces(benchmark::State& state) {
+  const Setup& s = setup(state.range(0));
+  for (auto _ : state) benchmark::DoNotOptimize(compute_faces(s.mesh).faces.data());
+}
+BENCHMARK(BM_ComputeFaces)->Arg(4000)->Arg(40000)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace shatter

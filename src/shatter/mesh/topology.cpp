@@ -44,21 +44,23 @@ TetFaces compute_faces(const TetMesh& mesh) {
         }
         continue;
       }
-      // v is the smallest corner of the faces opposite the corners k with every corner other than
-      // k and v's own above v; each face is listed under one corner only.
-      for (int k = 0; k < 4; ++k) {
-        if (t[k] == v) continue;
-        Index b = -1, c = -1;  // the face's corners other than v, b <= c
-        bool owned = true;
-        for (int i = 0; i < 4 && owned; ++i) {
-          if (i == k || t[i] == v) continue;
-          owned = t[i] > v;
-          if (b < 0)
-            b = t[i];
-          else
-            c = t[i];
+      // v is the smallest corner of the faces through it opposite each corner k whose other two
+      // corners are above v: all three when v is the tet's smallest corner, the one opposite the
+      // only corner below v when there is one, else none. Each face is listed under one node only.
+      int below = 0, low = -1;
+      for (int i = 0; i < 4; ++i)
+        if (t[i] < v) {
+          ++below;
+          low = i;
         }
-        if (owned) list(std::min(b, c), std::max(b, c), e, k);
+      if (below > 1) continue;
+      for (int k = 0; k < 4; ++k) {
+        if (t[k] == v || (below == 1 && k != low)) continue;
+        // The face's other two corners: neither k nor v's own.
+        Index b = -1, c = -1;
+        for (int i = 0; i < 4; ++i)
+          if (i != k && t[i] != v) (b < 0 ? b : c) = t[i];
+        list(std::min(b, c), std::max(b, c), e, k);
       }
     }
     // Insertion sort: stable, and the lists are short (a node's share of its tets' faces).
