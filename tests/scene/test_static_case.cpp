@@ -77,6 +77,7 @@ TEST(StaticCase, ParsesEveryField) {
   ASSERT_FALSE(bad.ok());
   EXPECT_EQ(bad.error().field, "solver.tangent") << bad.error().to_string();
   EXPECT_NE(bad.error().message.find("on-demand"), std::string::npos) << bad.error().message;
+  EXPECT_NE(bad.error().message.find("by-model"), std::string::npos) << bad.error().message;
 }
 
 TEST(StaticCase, DefaultsAndShortForms) {

@@ -272,6 +272,20 @@ TEST(StaticSolver, DirectSolverTakesOverWhereCheaper) {
   EXPECT_GT(r->linear_iterations_total, 0);
 }
 
+// by-model resolves to what impacts need per model; every kind round-trips through its name.
+TEST(StaticSolver, TangentByModel) {
+  EXPECT_EQ(resolve_tangent(TangentKind::by_model, ModelKind::stvk), TangentKind::projected);
+  EXPECT_EQ(resolve_tangent(TangentKind::by_model, ModelKind::corotated), TangentKind::on_demand);
+  EXPECT_EQ(resolve_tangent(TangentKind::by_model, ModelKind::linear), TangentKind::on_demand);
+  for (const TangentKind k :
+       {TangentKind::on_demand, TangentKind::projected, TangentKind::exact, TangentKind::by_model}) {
+    EXPECT_EQ(resolve_tangent(k, ModelKind::corotated), k == TangentKind::by_model ? TangentKind::on_demand : k);
+    const auto parsed = parse_tangent_kind(to_string(k));
+    ASSERT_OK(parsed);
+    EXPECT_EQ(*parsed, k);
+  }
+}
+
 TEST(StaticSolver, ProjectionOnDemandBeatsAlwaysProjecting) {
   // The always-projected stiffness drops the compressive part of the geometric stiffness of every
   // bent element: Newton converges only linearly and needs many more iterations.

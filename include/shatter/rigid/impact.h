@@ -91,7 +91,9 @@ struct ImpactSettings {
   /// and yielded tets' stresses are returned to the yield surface for the tensile criterion
   /// (CrackOptions::return_to_yield): ductile bodies dent, and tear only by plastic strain.
   FractureOptions fracture = default_impact_fracture_options();
-  /// The static solve. Its PCG warm start is off by default, so that an event's outcome depends
+  /// The static solve. Its stiffness goes by the body's model (TangentKind::by_model: projected
+  /// for StVK, exact and projected on demand for the corotated and linear models). Its PCG warm
+  /// start is off by default, so that an event's outcome depends
   /// only on the body and its contacts, not on the solver's history (replays and restored
   /// snapshots give the same bits); the pattern and symbolic analysis are reused either way.
   /// Newton iterations per load step, load halvings and Newton iterations in all are capped (12, 3

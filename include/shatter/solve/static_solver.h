@@ -43,8 +43,14 @@ enum class TangentKind {
   projected,
   /// The exact K only; a failure is the step's failure.
   exact,
+  /// By the body's model, as impacts choose (docs/solver.md): projected for StVK, whose exact K
+  /// softens under compression and whose exact steps follow the softening (a clay body dented by
+  /// a blow tears); on_demand for the linear and corotated models, which do not soften.
+  by_model,
 };
-/// "on-demand", "projected", "exact".
+/// The kind a solve of a `model` body uses for `kind` (by_model resolved; the others as given).
+TangentKind resolve_tangent(TangentKind kind, ModelKind model);
+/// "on-demand", "projected", "exact", "by-model".
 const char* to_string(TangentKind kind);
 /// The inverse of to_string (an error names the valid values).
 Result<TangentKind> parse_tangent_kind(std::string_view name);

@@ -186,14 +186,21 @@ const char* to_string(TangentKind kind) {
     case TangentKind::on_demand: return "on-demand";
     case TangentKind::projected: return "projected";
     case TangentKind::exact: return "exact";
+    case TangentKind::by_model: return "by-model";
   }
   return "?";
 }
 
 Result<TangentKind> parse_tangent_kind(std::string_view name) {
-  for (TangentKind k : {TangentKind::on_demand, TangentKind::projected, TangentKind::exact})
+  for (TangentKind k : {TangentKind::on_demand, TangentKind::projected, TangentKind::exact, TangentKind::by_model})
     if (name == to_string(k)) return k;
-  return field_error("tangent", "unknown tangent '" + std::string(name) + "'; expected on-demand, projected or exact");
+  return field_error("tangent",
+                     "unknown tangent '" + std::string(name) + "'; expected on-demand, projected, exact or by-model");
+}
+
+TangentKind resolve_tangent(TangentKind kind, ModelKind model) {
+  if (kind != TangentKind::by_model) return kind;
+  return model == ModelKind::stvk ? TangentKind::projected : TangentKind::on_demand;
 }
 
 const char* to_string(SolveStatus status) {
@@ -428,8 +435,9 @@ StaticSolver::Outcome StaticSolver::newton_iteration(SolveState& st, double s, i
   };
   // Project on demand: the exact stiffness first (quadratic convergence where it is positive
   // definite), the projected one where the exact one fails to give an energy decrease.
-  const bool on_demand = options_.tangent == TangentKind::on_demand;
-  if (options_.tangent != TangentKind::projected) {
+  const TangentKind tangent = resolve_tangent(options_.tangent, st.model.model);
+  const bool on_demand = tangent == TangentKind::on_demand;
+  if (tangent != TangentKind::projected) {
     bool indefinite = false;
     Outcome direction = newton_direction(st, iteration, relative_residual, false, indefinite);
     if (!on_demand && !direction.ok()) return finish(std::move(direction));
