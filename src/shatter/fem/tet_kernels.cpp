@@ -70,6 +70,36 @@ Mat12 stiffness_closed_form(const Lame& lame, double volume, const Mat43& B, con
   return K;
 }
 
+// Corotated blocks from dP = 2 mu dF + lambda tr(R^T dF) R + c dR, c = lambda tr(S - I) - 2 mu, and
+// dR = R [w]x with (tr(S) I - S) w = axial(R^T dF - dF^T R) (first_piola_differential). For the
+// column dF = e_b g_j^T (corner j moved along axis b): R^T dF = r_b g_j^T with r_b = R^T e_b, so
+// tr(R^T dF) = r_b . g_j and the axial vector is g_j x r_b. The polar decomposition and
+// (tr(S) I - S)^-1 are found once per tet, not once per column.
+Mat12 corotated_stiffness(const Lame& lame, const TetRest& rest, const Mat34& x) {
+  const Mat3 F = deformation_gradient(rest, x);
+  const Polar p = polar_decomposition(F);
+  const Mat3 G_inv = (p.S.trace() * Mat3::Identity() - p.S).inverse();
+  const double c = lame.lambda * (p.S.trace() - 3.0) - 2.0 * lame.mu;
+  const Mat43 B = shape_gradients(rest);
+  const Mat3 Dm_inv_t = rest.Dm_inv.transpose();
+  Mat12 K;
+  for (int j = 0; j < 4; ++j) {
+    const Vec3 g = B.row(j).transpose();
+    for (int b = 0; b < 3; ++b) {
+      const Vec3 r = p.R.row(b).transpose();
+      const Vec3 w = G_inv * g.cross(r);
+      Mat3 W;
+      W << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
+      Mat3 dP = lame.lambda * r.dot(g) * p.R + c * (p.R * W);
+      dP.row(b) += 2.0 * lame.mu * g.transpose();
+      const Mat3 dH = rest.volume * dP * Dm_inv_t;
+      K.block<3, 1>(0, 3 * j + b) = -dH.rowwise().sum();
+      for (int i = 1; i < 4; ++i) K.block<3, 1>(3 * i, 3 * j + b) = dH.col(i - 1);
+    }
+  }
+  return K;
+}
+
 }  // namespace
 
 Mat12 tet_stiffness_from_differential(ModelKind kind, const Lame& lame, const TetRest& rest, const Mat34& x) {
@@ -99,7 +129,7 @@ Mat12 tet_stiffness(ModelKind kind, const Lame& lame, const TetRest& rest, const
     }
     case ModelKind::linear:
       return stiffness_closed_form(lame, rest.volume, shape_gradients(rest), Mat3::Identity(), Mat3::Zero());
-    case ModelKind::corotated: break;
+    case ModelKind::corotated: return corotated_stiffness(lame, rest, x);
   }
   return tet_stiffness_from_differential(kind, lame, rest, x);
 }
