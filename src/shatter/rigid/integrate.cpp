@@ -3,6 +3,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -340,20 +341,32 @@ int drift_lanes_baseline(std::span<const RigidInertia* const> inertia, std::span
 void integrate_positions(std::span<const RigidInertia* const> inertia, std::span<RigidState* const> states, double dt,
                          std::span<Mat3* const> rotations) {
   SHATTER_CHECK(inertia.size() == states.size() && rotations.size() == states.size() && states.size() <= 4);
-  // Lanes only for dynamic bodies that spin; the others (and lanes whose fixed point must be split)
-  // one at a time, which gives the same bits.
-  bool lanes = !states.empty();
+  // The dynamic bodies that spin go side by side in lanes (when there are two or more); the others,
+  // and lanes whose fixed point must be split, one at a time. The same bits either way.
+  std::array<std::size_t, 4> of_lane{};
+  std::array<const RigidInertia*, 4> lane_inertia{};
+  std::array<RigidState*, 4> lane_states{};
+  std::array<Mat3*, 4> lane_rotations{};
+  std::size_t lanes = 0;
   for (std::size_t i = 0; i < states.size(); ++i)
-    lanes = lanes && inertia[i]->inverse_mass != 0 && states[i]->angular_velocity.squaredNorm() != 0;
-  int failed = 0;
-  if (!lanes) {
-    failed = (1 << states.size()) - 1;
-  } else {
-    failed = simd_isa() == SimdIsa::avx2 ? drift_lanes_avx2(inertia, states, dt, rotations)
-                                         : drift_lanes_baseline(inertia, states, dt, rotations);
+    if (inertia[i]->inverse_mass != 0 && states[i]->angular_velocity.squaredNorm() != 0) {
+      of_lane[lanes] = i;
+      lane_inertia[lanes] = inertia[i];
+      lane_states[lanes] = states[i];
+      lane_rotations[lanes] = rotations[i];
+      ++lanes;
+    }
+  if (lanes < 2) lanes = 0;
+  int failed = 0;  // by lane
+  if (lanes > 0) {
+    const auto drift = simd_isa() == SimdIsa::avx2 ? drift_lanes_avx2 : drift_lanes_baseline;
+    failed = drift(std::span(lane_inertia.data(), lanes), std::span(lane_states.data(), lanes), dt,
+                   std::span(lane_rotations.data(), lanes));
   }
+  std::array<bool, 4> drifted{};
+  for (std::size_t l = 0; l < lanes; ++l) drifted[of_lane[l]] = (failed >> l & 1) == 0;
   for (std::size_t i = 0; i < states.size(); ++i)
-    if ((failed >> i & 1) != 0) integrate_position(*inertia[i], *states[i], dt, rotations[i]);
+    if (!drifted[i]) integrate_position(*inertia[i], *states[i], dt, rotations[i]);
 }
 
 }  // namespace shatter

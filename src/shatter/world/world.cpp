@@ -808,7 +808,7 @@ void World::solve() {
             s.position = b.rigid.position;
           }
         },
-        settings_.parallel_min_bodies / 4);
+        (settings_.parallel_min_bodies + 3) / 4);  // groups: the same threshold in bodies
     contact_batches_.solve(solver_bodies_, inverse_h, false, settings_.contact.max_push_velocity);
   }
   contact_batches_.store();
