@@ -119,8 +119,9 @@ TEST(PlanCracks, TheFaceTableGivesTheSameRegions) {
     for (const double fraction : {0.05, 1.0}) {
       const CrackOptions options{.brittleness = 4, .radius_fraction = fraction, .max_cracks = 3, .branch = branch};
       const std::vector<CrackPlan> searched = plan_cracks(m, stress, mat, options);
-      FaceNeighborTable known = face_neighbor_table(faces);
-      const std::vector<CrackPlan> tabled = plan_cracks(m, stress, mat, options, {}, {}, &known);
+      FaceNeighborTable known;
+      const std::vector<CrackPlan> tabled = plan_cracks(m, stress, mat, options, {}, {}, &faces, &known);
+      ASSERT_EQ(known.size(), m.tets.size());
       ASSERT_EQ(searched.size(), tabled.size());
       ASSERT_GE(searched.size(), branch || fraction < 1 ? 2u : 1u);  // one region may take the whole bar
       for (std::size_t k = 0; k < searched.size(); ++k) {

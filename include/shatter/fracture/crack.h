@@ -104,12 +104,14 @@ std::vector<Index> crack_region(const TetMesh& mesh, FaceNeighborTable& known, I
 /// `ductile_origins` (tets over the maximum plastic strain) come first, with radius r_min.
 /// `tet_strength` gives each tet its own tensile strength (Pa, #tets; empty: the material's): a tet
 /// cracks when its stress exceeds its strength, origins are taken by decreasing stress over strength,
-/// and the crack radius follows the origin's own excess. `known` (or null: none known) gives the
-/// regions' face neighbours as far as the caller knows them (face_neighbor_table of a body's faces),
-/// and receives those searched.
+/// and the crack radius follows the origin's own excess. `faces` (compute_faces of `mesh`, or
+/// null), when the caller keeps them, gives the regions' face neighbours without a search;
+/// `neighbors` (or null) receives the neighbours known once the regions are grown (for
+/// carry_face_neighbors; left as it was when nothing is planned).
 std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStress>& stress, const Material& material,
                                    const CrackOptions& options = {}, const std::vector<Index>& ductile_origins = {},
-                                   const std::vector<double>& tet_strength = {}, FaceNeighborTable* known = nullptr);
+                                   const std::vector<double>& tet_strength = {}, const TetFaces* faces = nullptr,
+                                   FaceNeighborTable* neighbors = nullptr);
 
 /// Exponentially time-averaged stress per tet: sigma_avg += (1 - exp(-dt / tau)) (sigma - sigma_avg).
 /// A stress must persist for about tau to count fully, so a one-step spike does not crack a body

@@ -189,7 +189,8 @@ std::vector<Index> crack_region(const TetMesh& mesh, FaceNeighborTable& known, I
 
 std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStress>& stress, const Material& material,
                                    const CrackOptions& options, const std::vector<Index>& ductile_origins,
-                                   const std::vector<double>& tet_strength, FaceNeighborTable* known) {
+                                   const std::vector<double>& tet_strength, const TetFaces* faces,
+                                   FaceNeighborTable* neighbors) {
   SHATTER_CHECK(stress.size() == mesh.tets.size());
   SHATTER_CHECK(tet_strength.empty() || tet_strength.size() == mesh.tets.size());
   std::vector<CrackPlan> plans;
@@ -223,12 +224,9 @@ std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStr
   });
   if (over.empty() && ductile_origins.empty()) return plans;
 
-  FaceNeighborTable own;
-  if (known == nullptr) {
-    own = unknown_face_neighbors(mesh.num_tets());
-    known = &own;
-  }
-  FaceNeighbors neighbors(mesh, *known);  // shared by the plans' regions
+  SHATTER_CHECK(faces == nullptr || faces->tet_faces.size() == mesh.tets.size());
+  FaceNeighborTable known = faces != nullptr ? face_neighbor_table(*faces) : unknown_face_neighbors(mesh.num_tets());
+  FaceNeighbors face_neighbors(mesh, known);  // shared by the plans' regions
   std::vector<char> taken(mesh.tets.size(), 0);
   auto consider = [&](Index e, bool ductile) {
     if (static_cast<int>(plans.size()) >= options.max_cracks || (taken[e] && !options.branch)) return;
@@ -246,12 +244,13 @@ std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStr
     p.stress = tension(e);
     p.radius = r;
     p.ductile = ductile;
-    p.tets = grow_region(mesh, neighbors, e, c, r);
+    p.tets = grow_region(mesh, face_neighbors, e, c, r);
     for (Index t : p.tets) taken[t] = 1;
     plans.push_back(std::move(p));
   };
   for (Index e : ductile_origins) consider(e, true);
   for (Index e : over) consider(e, false);
+  if (neighbors != nullptr) *neighbors = std::move(known);
   return plans;
 }
 

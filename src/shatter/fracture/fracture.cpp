@@ -5,7 +5,6 @@
 #include <utility>
 
 #include "shatter/core/assert.h"
-#include "shatter/mesh/topology.h"
 
 namespace shatter {
 
@@ -31,13 +30,11 @@ FractureResult fracture_with_stress(const TetMesh& rest, const FemModel& model, 
   r.tet_parent.resize(rest.tets.size());
   std::iota(r.tet_parent.begin(), r.tet_parent.end(), Index(0));
 
-  // Face neighbours of the mesh being cut, carried from cut to cut (below): each crack's region
-  // grows in them, searching only what they do not know.
-  SHATTER_CHECK(options.faces == nullptr || options.faces->tet_faces.size() == rest.tets.size());
-  FaceNeighborTable known =
-      options.faces != nullptr ? face_neighbor_table(*options.faces) : unknown_face_neighbors(rest.num_tets());
-  const std::vector<CrackPlan> plans =
-      plan_cracks(r.mesh, r.stress, material, options.crack, r.plastic.failed, options.tensile_strength, &known);
+  // Face neighbours of the mesh being cut, from the plans' regions and carried from cut to cut
+  // (below): each crack's region grows in them, searching only what they do not know.
+  FaceNeighborTable known;
+  const std::vector<CrackPlan> plans = plan_cracks(r.mesh, r.stress, material, options.crack, r.plastic.failed,
+                                                   options.tensile_strength, options.faces, &known);
   for (std::size_t k = 0; k < plans.size(); ++k) {
     CrackEvent ev;
     ev.plan = plans[k];
