@@ -74,8 +74,10 @@ std::vector<SceneBody> scene(int which) {
   return which == 2 ? pyramid_scene() : which == 3 ? pile_scene() : resting_scene();
 }
 
-std::unique_ptr<World> make_world(const std::vector<SceneBody>& bodies, bool sleep) {
-  auto w = std::make_unique<World>(scenes::settings(sleep));
+std::unique_ptr<World> make_world(const std::vector<SceneBody>& bodies, bool sleep, bool reuse = true) {
+  WorldSettings settings = scenes::settings(sleep);
+  if (!reuse) settings.contact_reuse_distance = 0;
+  auto w = std::make_unique<World>(settings);
   scenes::add_ground(*w);
   for (const SceneBody& b : bodies) {
     BodyDef def;
@@ -85,12 +87,13 @@ std::unique_ptr<World> make_world(const std::vector<SceneBody>& bodies, bool sle
   return w;
 }
 
-// which: 0 resting awake, 1 resting asleep, 2 pyramid, 3 pile (first 2 s from the drop).
+// which: 0 resting awake, 1 resting asleep, 2 pyramid, 3 pile (first 2 s from the drop); reuse:
+// 0 turns the reuse of contacts off (WorldSettings::contact_reuse_distance).
 void BM_WorldStep(benchmark::State& state) {
   const int which = static_cast<int>(state.range(0));
   const auto bodies = scene(which);
   const bool sleep = which == 1;
-  auto w = make_world(bodies, sleep);
+  auto w = make_world(bodies, sleep, state.range(1) != 0);
   const int warm = which == 3 ? 0 : which == 1 ? 300 : 30;
   for (int i = 0; i < warm; ++i) w->step();
   const WorldSnapshot start = w->save();
@@ -109,6 +112,8 @@ void BM_WorldStep(benchmark::State& state) {
     sum.solver_ms += s.solver_ms;
     sum.contact_points += s.contact_points;
     sum.awake_bodies += s.awake_bodies;
+    sum.body_pairs += s.body_pairs;
+    sum.reused_pairs += s.reused_pairs;
     ++steps;
   }
   const auto n = static_cast<double>(steps);
@@ -117,8 +122,17 @@ void BM_WorldStep(benchmark::State& state) {
   state.counters["solver_ms"] = sum.solver_ms / n;
   state.counters["points"] = static_cast<double>(sum.contact_points) / n;
   state.counters["awake"] = static_cast<double>(sum.awake_bodies) / n;
+  state.counters["reused"] =  // fraction of the pairs that kept their contacts
+      sum.body_pairs > 0 ? static_cast<double>(sum.reused_pairs) / static_cast<double>(sum.body_pairs) : 0.0;
 }
-BENCHMARK(BM_WorldStep)->ArgName("scene")->DenseRange(0, 3)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_WorldStep)
+    ->ArgNames({"scene", "reuse"})
+    ->ArgsProduct({{0, 1, 2, 3}, {1}})
+    ->Args({0, 0})
+    ->Args({2, 0})
+    ->Args({3, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(2.0);
 
 #ifdef SHATTER_HAVE_BULLET
 // The same scene in Bullet: each body a btConvexHullShape of its piece hulls' vertices (the box

@@ -33,13 +33,14 @@ Result<Scene> parse(const std::string& text) { return parse_scene(text, "scene.j
 
 TEST(SceneFile, ParsesAValidScene) {
   auto s = parse(scene_text(
-      R"("world": {"time_step": 0.01, "substeps": 4, "gravity": [0, -10, 0], "seed": 42}, "ground": {"height": 0.1, "friction": 0.3}, "impact": {"collision_radius": 0.4}, "materials": {"china": {"preset": "porcelain", "tensile_strength": 30e6, "weibull_modulus": 8}}, "actions": [{"time": 0.05, "type": "strike", "body": "vase", "impulse": [1, 0, 0], "speed": 5}],)",
+      R"("world": {"time_step": 0.01, "substeps": 4, "gravity": [0, -10, 0], "seed": 42, "contact_reuse": 0.002}, "ground": {"height": 0.1, "friction": 0.3}, "impact": {"collision_radius": 0.4}, "materials": {"china": {"preset": "porcelain", "tensile_strength": 30e6, "weibull_modulus": 8}}, "actions": [{"time": 0.05, "type": "strike", "body": "vase", "impulse": [1, 0, 0], "speed": 5}],)",
       R"(, "rotation": {"axis": [0, 0, 1], "degrees": 90}, "velocity": [1, 0, 0], "impact": {"max_plastic_strain": 0.5})"));
   ASSERT_OK(s);
   EXPECT_EQ(s->name, "t");
   EXPECT_EQ(s->world.substeps, 4);
   EXPECT_DOUBLE_EQ(s->world.time_step, 0.01);
   EXPECT_EQ(s->world.seed, 42U);
+  EXPECT_DOUBLE_EQ(s->world.contact_reuse_distance, 0.002);
   EXPECT_DOUBLE_EQ(s->ground_height, 0.1);
   ASSERT_EQ(s->bodies.size(), 1U);
   EXPECT_DOUBLE_EQ(s->bodies[0].impact.collision_radius, 0.4);                        // the scene's
@@ -66,6 +67,7 @@ TEST(SceneFile, EveryMistakeIsNamed) {
       {scene_text(R"("world": {"time_step": "fast"},)"), "world.time_step"},
       {scene_text(R"("world": {"contact_mode": "magic"},)"), "world.contact_mode"},
       {scene_text(R"("world": {"seed": -1},)"), "world.seed: expected an integer >= 0"},
+      {scene_text(R"("world": {"contact_reuse": -0.001},)"), "world.contact_reuse: expected a distance in [0, 0.1] m"},
       {scene_text(R"("world": {"seed": 1.5},)"), "world.seed"},
       {scene_text(R"("materials": {"m": {"preset": "glass", "weibull_modulus": 0.1}},)"),
        "materials.m.weibull_modulus: material 'glass (modified)': Weibull modulus must be 0"},

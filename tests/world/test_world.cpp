@@ -450,6 +450,77 @@ TEST(World, KinematicBodyPushesAndWakesWhatItTouches) {
   EXPECT_LT(w.rigid_state(box).position.x() - w.rigid_state(k).position.x(), 0.17);
 }
 
+// Resting pairs keep their contacts, moved with the bodies (WorldSettings::contact_reuse_distance),
+// and rest as they do when every pair is collided every step; a pair moving faster than the
+// reuse distance per step never reuses them.
+TEST(World, RestingPairsReuseTheirContactsAndRestAsWithout) {
+  std::vector<std::vector<Vec3>> rest;
+  for (const double reuse : {0.0, 0.001}) {
+    WorldSettings settings = scenes::settings(false);
+    settings.contact_reuse_distance = reuse;
+    World w(settings);
+    add_ground(w);
+    const auto ids = scenes::add_pyramid(w, 6, 0.5);
+    std::int64_t reused = 0, pairs = 0;
+    for (int i = 0; i < 180; ++i) {
+      w.step();
+      if (i >= 120) {
+        reused += w.stats().reused_pairs;
+        pairs += w.stats().body_pairs;
+      }
+    }
+    if (reuse == 0) {
+      EXPECT_EQ(reused, 0);
+    } else {
+      EXPECT_GT(reused, 9 * pairs / 10);  // settled: nearly every pair keeps its contacts
+    }
+    std::vector<Vec3> x;
+    for (const BodyId id : ids) x.push_back(w.rigid_state(id).position);
+    rest.push_back(std::move(x));
+  }
+  double largest = 0;
+  for (std::size_t k = 0; k < rest[0].size(); ++k) largest = std::max(largest, (rest[1][k] - rest[0][k]).norm());
+  EXPECT_LT(largest, 1e-4);  // m: the same rest, within a tenth of a millimetre
+
+  // A box sliding at 1 m/s (17 mm a step) collides with the ground afresh every step.
+  World w(scenes::settings(false));
+  add_ground(w);
+  BodyDef def;
+  def.rigid.position = Vec3(0, 0.1, 0);
+  def.rigid.linear_velocity = Vec3(1, 0, 0);
+  def.surface.friction = 0;
+  (void)*w.add_body(scenes::box_model(Vec3::Constant(0.1)), def);
+  for (int i = 0; i < 30; ++i) {
+    w.step();
+    EXPECT_EQ(w.stats().reused_pairs, 0) << "step " << i;
+  }
+}
+
+// A kinematic paddle creeping at 3 cm/s (half a millimetre a step, so the pairs it touches reuse
+// their contacts between fresh ones) pushes a box and never passes into it.
+TEST(World, CreepingKinematicBodyPushesWithoutSinkingIn) {
+  World w(scenes::settings(false));
+  add_ground(w);
+  const BodyId box = add_dynamic(w, scenes::box_model(Vec3::Constant(0.1)), Vec3(0, 0.1, 0));
+  BodyDef paddle;
+  paddle.type = BodyType::kinematic;
+  paddle.rigid.position = Vec3(-0.16, 0.1, 0);
+  paddle.rigid.linear_velocity = Vec3(0.03, 0, 0);
+  const BodyId k = *w.add_box(Vec3(0.05, 0.1, 0.3), paddle);
+  std::int64_t reused = 0;
+  double deepest = 0;
+  for (int i = 0; i < 240; ++i) {
+    w.step();
+    reused += w.stats().reused_pairs;
+    const double gap = (w.rigid_state(box).position.x() - 0.1) - (w.rigid_state(k).position.x() + 0.05);
+    deepest = std::max(deepest, -gap);
+  }
+  EXPECT_GT(reused, 0);
+  // The paddle's face ends at x = 0.01 m: the box's centre is pushed to 0.11 m.
+  EXPECT_GT(w.rigid_state(box).position.x(), 0.109);
+  EXPECT_LT(deepest, 1e-3);  // m
+}
+
 TEST(World, BadInputGivesErrors) {
   World w;
   EXPECT_FALSE(w.add_body(nullptr, {}).ok());

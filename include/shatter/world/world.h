@@ -14,6 +14,7 @@
 // changing state (poses, velocities, sleep, contact caches, exclusions); state_hash() digests it.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -118,6 +119,11 @@ struct WorldSettings {
   DecompositionOptions decomposition;  ///< convex pieces of tet bodies
   /// Contacts are made for gaps up to this plus the distance the pair can close within a step, m.
   double speculative_distance = 0.004;
+  /// A pair whose bodies moved less than this relative to each other since its contacts were found
+  /// keeps them, moved with the bodies, instead of colliding its shapes again (Jolt's body-pair
+  /// cache), m. Contacts are then made for gaps this much wider, so that none is missed meanwhile.
+  /// 0: collide every awake pair every step.
+  double contact_reuse_distance = 0.001;
   bool enable_sleep = true;
   double time_to_sleep = 0.5;    ///< s a whole island must stay slow before it sleeps
   double sleep_velocity = 0.01;  ///< m/s: |v| + |w| r below this counts as slow
@@ -200,6 +206,22 @@ struct StepEvents {
   std::vector<BodyId> removed;  ///< bodies replaced by their fragments
 };
 
+/// Where a contact's manifold was found: the pair's relative placement then, and its points on
+/// each body. While the pair has moved less than WorldSettings::contact_reuse_distance relative
+/// to each other since, the narrow phase moves these points with the bodies instead of colliding
+/// the shapes again.
+struct ContactOrigin {
+  Vec3 offset = Vec3::Zero();        ///< B's centre of mass in A's frame, m
+  Quat rotation = Quat::Identity();  ///< B's orientation relative to A's (q_A^-1 q_B)
+  /// Gap up to which the pair's contacts were made, m; < 0: not to be reused (a shape changed).
+  double margin = -1;
+  Vec3 normal_a = Vec3::UnitY();  ///< the normal in A's frame
+  std::array<Vec3, 4> point_a{Vec3::Zero(), Vec3::Zero(), Vec3::Zero(),
+                              Vec3::Zero()};  ///< each point's end on A's surface, A's frame, m
+  std::array<Vec3, 4> point_b{Vec3::Zero(), Vec3::Zero(), Vec3::Zero(),
+                              Vec3::Zero()};  ///< and on B's surface, B's frame, m
+};
+
 /// A contact between two bodies (one manifold), with what the solver did in the last step.
 struct Contact {
   Index body_a = -1;             ///< slot of body A (World::body_id gives its id); body_a < body_b
@@ -208,6 +230,7 @@ struct Contact {
   Index piece_b = -1;            ///< convex piece of B
   ContactConstraint constraint;  ///< normal, points, impulses (summed over the step), approach speeds
   SatCache sat;                  ///< separating-axis cache of the piece pair
+  ContactOrigin origin;          ///< where the manifold was found (for reuse)
 };
 
 class WorldSnapshot;
@@ -223,8 +246,9 @@ struct BodySurface {
 /// Counts of the last step, for benchmarks and tests.
 struct StepStats {
   std::int64_t awake_bodies = 0;
-  std::int64_t body_pairs = 0;  ///< pairs from the broad phase (and planes)
-  std::int64_t contacts = 0;    ///< manifolds solved
+  std::int64_t body_pairs = 0;    ///< pairs from the broad phase (and planes)
+  std::int64_t reused_pairs = 0;  ///< of them, pairs that kept their contacts (contact_reuse_distance)
+  std::int64_t contacts = 0;      ///< manifolds solved
   std::int64_t contact_points = 0;
   std::int64_t islands = 0;
   double broad_phase_ms = 0;  ///< wall time of each part
@@ -529,6 +553,8 @@ class World {
   std::vector<Aabb> boxes_;
   std::vector<PairRef> pairs_;
   std::vector<std::vector<Contact>> pair_contacts_;
+  std::vector<std::array<std::size_t, 2>> old_ranges_;  ///< per pair: its contacts_ of the last step
+  std::vector<char> pair_reused_;       ///< per pair of the narrow phase: its contacts moved, not found afresh
   std::vector<Contact> next_contacts_;  ///< the narrow phase's output buffer (swapped with contacts_)
   std::vector<SolverBody> solver_bodies_;
   ContactBatches contact_batches_;

@@ -430,6 +430,10 @@ Result<Scene> parse_scene(std::string_view text, const std::string& file, const 
       else
         return w.key("contact_mode").error("expected \"convex-pieces\" or \"tet-vertices\", got \"" + *v + "\"");
     }
+    if (const Json* j = wr.get("contact_reuse")) {
+      SHATTER_TRY(v, read_in_range(*j, w.key("contact_reuse"), 0, 0.1, "a distance in [0, 0.1] m (0: never)"));
+      scene.world.contact_reuse_distance = *v;
+    }
     if (const Json* j = wr.get("impacts")) {
       SHATTER_TRY(v, json_input::read_bool(*j, w.key("impacts")));
       scene.world.enable_impacts = *v;

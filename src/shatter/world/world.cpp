@@ -51,6 +51,34 @@ Aabb grow(Aabb box, double margin) {
 
 auto contact_key(const Contact& c) { return std::tie(c.body_a, c.body_b, c.piece_a, c.piece_b); }
 
+// The pair's placement for a contact origin: B's centre of mass in A's frame, and B's orientation
+// relative to A's.
+void relative_placement(const RigidState& a, const RigidState& b, Vec3& offset, Quat& rotation) {
+  const Quat a_inverse = a.orientation.conjugate();
+  offset = a_inverse * (b.position - a.position);
+  rotation = a_inverse * b.orientation;
+}
+
+// How far any point of one body can have moved relative to the other since `o` was recorded, m.
+// In A's frame a point r of B (body frame) sits at R r + t, so it moved by at most
+// |t - t0| + |R - R0| |r| <= |t - t0| + 2 sin(dθ/2) radius_B, where cos(dθ/2) = |q . q0| for the
+// relative rotation dθ between R0 and R. The same in B's frame with A's radius; the smaller bound
+// holds. A radius < 0 (a plane) leaves that frame out.
+double relative_motion(const ContactOrigin& o, const Vec3& offset, const Quat& rotation, double radius_a,
+                       double radius_b) {
+  const double c = std::min(1.0, std::abs(rotation.dot(o.rotation)));
+  const double chord = 2 * std::sqrt(std::max(0.0, 1 - c * c));  // 2 sin(dθ/2)
+  double moved = std::numeric_limits<double>::infinity();
+  if (radius_b >= 0) moved = (offset - o.offset).norm() + chord * radius_b;
+  if (radius_a >= 0) {
+    // A's centre of mass in B's frame: -R^T t.
+    const Vec3 a_in_b = rotation.conjugate() * offset;
+    const Vec3 a_in_b0 = o.rotation.conjugate() * o.offset;
+    moved = std::min(moved, (a_in_b - a_in_b0).norm() + chord * radius_a);
+  }
+  return moved;
+}
+
 bool key_less(const Contact& x, const Contact& y) { return contact_key(x) < contact_key(y); }
 
 // Union-find root with path halving.
@@ -538,23 +566,30 @@ void World::find_pairs(std::vector<PairRef>& pairs) {
 void World::narrow_phase(const std::vector<PairRef>& pairs) {
   const std::vector<Contact>& old = contacts_;
   pair_contacts_.resize(pairs.size());
+  pair_reused_.resize(pairs.size());
+  // Each pair's contacts of the last step, by one merge of the two sorted lists (a binary search
+  // per pair strode through kilobyte-sized contacts, a cache miss per probe).
+  old_ranges_.resize(pairs.size());
+  for (std::size_t k = 0, o = 0; k < pairs.size(); ++k) {
+    const std::array<Index, 2> key{pairs[k].a, pairs[k].b};
+    while (o < old.size() && std::array<Index, 2>{old[o].body_a, old[o].body_b} < key) ++o;
+    const std::size_t first = o;
+    while (o < old.size() && old[o].body_a == key[0] && old[o].body_b == key[1]) ++o;
+    old_ranges_[k] = {first, o};
+  }
   const bool tet_mode = settings_.contact_mode == ContactMode::tet_vertices;
   parallel_for(
       0, static_cast<std::int64_t>(pairs.size()),
       [&](std::int64_t k) {
         std::vector<Contact>& out = pair_contacts_[k];
         out.clear();
+        pair_reused_[k] = 0;
         const Index ia = pairs[k].a;
         const Index ib = pairs[k].b;
         const Body& a = bodies_[ia];
         const Body& b = bodies_[ib];
-        Contact probe;
-        probe.body_a = ia;
-        probe.body_b = ib;
-        probe.piece_a = std::numeric_limits<Index>::min();
-        const auto first_old = std::lower_bound(old.begin(), old.end(), probe, key_less);
-        auto old_end = first_old;
-        while (old_end != old.end() && old_end->body_a == ia && old_end->body_b == ib) ++old_end;
+        const auto first_old = old.begin() + static_cast<std::ptrdiff_t>(old_ranges_[k][0]);
+        const auto old_end = old.begin() + static_cast<std::ptrdiff_t>(old_ranges_[k][1]);
         if (!a.awake && !b.awake) {  // both asleep or static: nothing moved, keep what was found
           out.assign(first_old, old_end);
           return;
@@ -562,14 +597,18 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
         const double spec = settings_.speculative_distance + motion_bound(a) + motion_bound(b);
         const Transform ta = transform_of(a.rigid);
         const Transform tb = transform_of(b.rigid);
-        auto add_manifold = [&](const ContactManifold& m, Index pa, Index pb, const SatCache& sat) {
-          if (m.count == 0) return;
-          Contact c;
+        Vec3 offset;
+        Quat rotation;
+        relative_placement(a.rigid, b.rigid, offset, rotation);
+        auto push_manifold = [&](const ContactManifold& m, Index pa, Index pb, const SatCache& sat,
+                                 const ContactOrigin& origin) -> Contact& {
+          Contact& c = out.emplace_back();
           c.body_a = ia;
           c.body_b = ib;
           c.piece_a = pa;
           c.piece_b = pb;
           c.sat = sat;
+          c.origin = origin;
           c.constraint.normal = m.normal;
           c.constraint.count = m.count;
           for (int i = 0; i < m.count; ++i) {
@@ -577,7 +616,67 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
             c.constraint.points[i].separation = m.points[i].separation;
             c.constraint.points[i].feature = m.points[i].feature;
           }
-          out.push_back(c);
+          return c;
+        };
+        // The pair barely moved relative to each other since its contacts were found: move them
+        // with the bodies. Sound while every gap within this step's speculative distance was within
+        // the margin they were found with (a point moved at most `moved` closer since).
+        const double reuse = settings_.contact_reuse_distance;
+        if (reuse > 0 && first_old != old_end && !a.deform && !b.deform && first_old->origin.margin >= 0) {
+          const double moved =
+              relative_motion(first_old->origin, offset, rotation, a.shape->is_plane ? -1 : a.shape->radius,
+                              b.shape->is_plane ? -1 : b.shape->radius);
+          if (moved <= reuse && spec + moved <= first_old->origin.margin) {
+            for (auto it = first_old; it != old_end; ++it) {
+              // A copy of the last step's contact (its pieces, separating-axis cache, origin and
+              // impulses), moved with the bodies; the step's totals start again from zero, as a
+              // new contact's would (prepare_contact sets the rest).
+              Contact& c = out.emplace_back(*it);
+              ContactConstraint& cc = c.constraint;
+              const ContactOrigin& o = it->origin;
+              cc.normal = ta.rotation * o.normal_a;
+              // Warm start from its own impulses, the friction re-expressed in the new tangents (as
+              // the gather below does for contacts found afresh).
+              const Vec3 f = cc.friction_impulse.x() * cc.tangents[0] + cc.friction_impulse.y() * cc.tangents[1];
+              cc.twist_impulse *= it->constraint.normal.dot(cc.normal);
+              cc.tangents = tangent_basis(cc.normal);
+              cc.friction_impulse = {f.dot(cc.tangents[0]), f.dot(cc.tangents[1])};
+              cc.total_friction_impulse.setZero();
+              cc.total_twist_impulse = 0;
+              for (int i = 0; i < cc.count; ++i) {
+                ContactPoint& p = cc.points[i];
+                const Vec3 on_a = ta.apply(o.point_a[i]);
+                const Vec3 on_b = tb.apply(o.point_b[i]);
+                p.position = 0.5 * (on_a + on_b);
+                p.separation = cc.normal.dot(on_b - on_a);
+                p.approach_speed = 0;
+                p.max_normal_impulse = 0;
+                p.total_normal_impulse = 0;
+              }
+            }
+            pair_reused_[k] = 1;
+            return;
+          }
+        }
+        // Found afresh, their origin recorded. A pair slow enough that its contacts may be reused
+        // next step gets them for gaps `reuse` wider (a pair that moves more cannot reuse them, and
+        // would pay for the wider margin in vain).
+        const double margin = reuse > 0 && motion_bound(a) + motion_bound(b) <= reuse ? spec + reuse : spec;
+        auto add_manifold = [&](const ContactManifold& m, Index pa, Index pb, const SatCache& sat) {
+          if (m.count == 0) return;
+          ContactOrigin origin;
+          if (reuse > 0 && !a.deform && !b.deform) {
+            origin.offset = offset;
+            origin.rotation = rotation;
+            origin.margin = margin;
+            origin.normal_a = ta.rotation.transpose() * m.normal;
+            for (int i = 0; i < m.count; ++i) {
+              const Vec3 half_gap = 0.5 * m.points[i].separation * m.normal;
+              origin.point_a[i] = ta.apply_inverse(m.points[i].point - half_gap);
+              origin.point_b[i] = tb.apply_inverse(m.points[i].point + half_gap);
+            }
+          }
+          push_manifold(m, pa, pb, sat, origin);
         };
         auto add_points = [&](const std::vector<PointContact>& points) {
           for (const PointContact& p : points) {
@@ -596,7 +695,7 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
           if (tet_mode && !body.shape->tet.empty()) {
             thread_local std::vector<PointContact> points;  // scratch per worker thread
             points.clear();
-            collide_tet_shape_plane(body.shape->tet[0], tbody, plane, spec, points);
+            collide_tet_shape_plane(body.shape->tet[0], tbody, plane, margin, points);
             if (plane_first)
               for (PointContact& p : points) p.normal = -p.normal;
             add_points(points);
@@ -604,7 +703,7 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
           }
           const auto& pieces = body.shape->pieces;
           for (Index i = 0; i < static_cast<Index>(pieces.size()); ++i) {
-            ContactManifold m = collide_hull_plane(pieces[i], tbody, plane, spec);
+            ContactManifold m = collide_hull_plane(pieces[i], tbody, plane, margin);
             if (plane_first) m.normal = -m.normal;  // from the plane (A) to the hull (B)
             add_manifold(m, plane_first ? -1 : i, plane_first ? i : -1, {});
           }
@@ -613,7 +712,7 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
         if (tet_mode && !a.shape->tet.empty() && !b.shape->tet.empty()) {
           thread_local std::vector<PointContact> points;  // scratch per worker thread
           points.clear();
-          collide_tet_shapes(a.shape->tet[0], ta, b.shape->tet[0], tb, spec, points);
+          collide_tet_shapes(a.shape->tet[0], ta, b.shape->tet[0], tb, margin, points);
           add_points(points);
           return;
         }
@@ -623,11 +722,11 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
         for (Index i = 0; i < static_cast<Index>(pa.size()); ++i) {
           const Aabb box_a = transform_box(pa[i].bounds, ta);
           for (Index j = 0; j < static_cast<Index>(pb.size()); ++j) {
-            if (!boxes_overlap(box_a, grow(transform_box(pb[j].bounds, tb), spec))) continue;
+            if (!boxes_overlap(box_a, grow(transform_box(pb[j].bounds, tb), margin))) continue;
             SatCache sat;
             while (old_it != old_end && std::tie(old_it->piece_a, old_it->piece_b) < std::tie(i, j)) ++old_it;
             if (old_it != old_end && old_it->piece_a == i && old_it->piece_b == j) sat = old_it->sat;
-            const ContactManifold m = collide_hulls(pa[i], ta, pb[j], tb, spec, &sat);
+            const ContactManifold m = collide_hulls(pa[i], ta, pb[j], tb, margin, &sat);
             add_manifold(m, i, j, sat);
           }
         }
@@ -647,8 +746,14 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
       if (!found.empty()) still_together.push_back({pairs[k].a, pairs[k].b});
       continue;
     }
+    if (pair_reused_[k]) {  // warm-started already
+      for (Contact& c : found) next.push_back(std::move(c));
+      continue;
+    }
+    const auto pair_old = old.begin() + static_cast<std::ptrdiff_t>(old_ranges_[k][0]);
+    const auto pair_old_end = old.begin() + static_cast<std::ptrdiff_t>(old_ranges_[k][1]);
     for (Contact& c : found) {
-      const auto [lo, hi] = std::equal_range(old.begin(), old.end(), c, key_less);
+      const auto [lo, hi] = std::equal_range(pair_old, pair_old_end, c, key_less);
       ContactConstraint& cc = c.constraint;
       cc.tangents = tangent_basis(cc.normal);
       bool manifold_matched = false;
@@ -676,6 +781,7 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
   }
   until_apart_ = std::move(still_together);
   contacts_.swap(next);
+  stats_.reused_pairs = std::count(pair_reused_.begin(), pair_reused_.end(), char{1});
 }
 
 void World::update_islands_and_wake() {
@@ -1078,6 +1184,9 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
                                   : inherit_shape(*body.shape, child);
     if (shape) {
       body.shape = std::move(*shape);
+      // Its contacts were found with the old shape: find them again.
+      for (Contact& c : contacts_)
+        if (c.body_a == id || c.body_b == id) c.origin.margin = -1;
       body.model = child.model;
       body.inertia = rigid_inertia(child.model->mass);
       body.rigid = child.rigid;
@@ -1551,6 +1660,14 @@ std::uint64_t World::state_hash() const {
                                   p.total_normal_impulse});
     }
     h.add(std::array<double, 3>{cc.friction_impulse.x(), cc.friction_impulse.y(), cc.twist_impulse});
+    const ContactOrigin& o = c.origin;
+    h.add(o.margin);
+    if (o.margin < 0) continue;
+    h.add(std::array<double, 10>{o.offset.x(), o.offset.y(), o.offset.z(), o.rotation.w(), o.rotation.x(),
+                                 o.rotation.y(), o.rotation.z(), o.normal_a.x(), o.normal_a.y(), o.normal_a.z()});
+    for (int i = 0; i < cc.count; ++i)
+      h.add(std::array<double, 6>{o.point_a[i].x(), o.point_a[i].y(), o.point_a[i].z(), o.point_b[i].x(),
+                                  o.point_b[i].y(), o.point_b[i].z()});
   }
   for (const auto& p : excluded_) h.add(p);
   h.add(std::int64_t{-1});
