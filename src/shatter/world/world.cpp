@@ -621,7 +621,7 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
         // The pair barely moved relative to each other since its contacts were found: move them
         // with the bodies. Sound while every gap within this step's speculative distance was within
         // the margin they were found with (a point moved at most `moved` closer since).
-        const double reuse = settings_.contact_reuse_distance;
+        const double reuse = std::isfinite(settings_.contact_reuse_distance) ? settings_.contact_reuse_distance : 0.0;
         if (reuse > 0 && first_old != old_end && !a.deform && !b.deform && first_old->origin.margin >= 0) {
           const double moved =
               relative_motion(first_old->origin, offset, rotation, a.shape->is_plane ? -1 : a.shape->radius,
@@ -718,11 +718,24 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
         }
         const auto& pa = a.shape->pieces;
         const auto& pb = b.shape->pieces;
+        // B's pieces' boxes (grown by the margin) once per pair, and around them all: a piece of A
+        // away from all of B is passed over.
+        thread_local std::vector<Aabb> boxes_b;  // scratch per worker thread
+        boxes_b.clear();
+        Aabb all_b;
+        for (const ConvexHull& piece : pb) {
+          boxes_b.push_back(grow(transform_box(piece.bounds, tb), margin));
+          if (!boxes_b.back().empty()) {
+            all_b.extend(boxes_b.back().min);
+            all_b.extend(boxes_b.back().max);
+          }
+        }
         auto old_it = first_old;
         for (Index i = 0; i < static_cast<Index>(pa.size()); ++i) {
           const Aabb box_a = transform_box(pa[i].bounds, ta);
+          if (!boxes_overlap(box_a, all_b)) continue;
           for (Index j = 0; j < static_cast<Index>(pb.size()); ++j) {
-            if (!boxes_overlap(box_a, grow(transform_box(pb[j].bounds, tb), margin))) continue;
+            if (!boxes_overlap(box_a, boxes_b[j])) continue;
             SatCache sat;
             while (old_it != old_end && std::tie(old_it->piece_a, old_it->piece_b) < std::tie(i, j)) ++old_it;
             if (old_it != old_end && old_it->piece_a == i && old_it->piece_b == j) sat = old_it->sat;
