@@ -54,6 +54,10 @@ TEST(Base64, EncodeDecodeAllLengths) {
   std::string text;
   io::base64_encode("Man", text);
   EXPECT_EQ(text, "TWFu");
+  // RFC 4648's vectors, each appended to what the string already holds.
+  std::string appended = "<";
+  for (const char* s : {"", "f", "fo", "foo", "foob", "fooba", "foobar"}) io::base64_encode(s, appended);
+  EXPECT_EQ(appended, "<Zg==Zm8=Zm9vZm9vYg==Zm9vYmE=Zm9vYmFy");
   // Two separately padded blocks decode as one stream.
   std::string out;
   std::size_t bad = 0;
