@@ -475,6 +475,7 @@ TEST(World, RestingPairsReuseTheirContactsAndRestAsWithout) {
       EXPECT_GT(reused, 9 * pairs / 10);  // settled: nearly every pair keeps its contacts
     }
     std::vector<Vec3> x;
+    x.reserve(ids.size());
     for (const BodyId id : ids) x.push_back(w.rigid_state(id).position);
     rest.push_back(std::move(x));
   }
