@@ -416,7 +416,12 @@ class World {
   struct Body {
     BodyType type = BodyType::dynamic;
     std::shared_ptr<const BodyModel> model;
-    std::shared_ptr<const Shape> shape;
+    std::shared_ptr<const Shape> shape;  ///< set with set_shape, which copies the next three
+    // The shape's box, radius and kind beside the pose: the broad phase reads them for every body
+    // every step, and following `shape` there cost a cache miss per body.
+    Aabb local_bounds;
+    double radius = 0;
+    bool is_plane = false;
     RigidInertia inertia;
     RigidState rigid;
     SurfaceMaterial surface;
@@ -457,6 +462,7 @@ class World {
   /// The body of a valid id (stops the program on an invalid one).
   [[nodiscard]] const Body& body(BodyId id) const;
   void wake_slot(Index slot);
+  static void set_shape(Body& b, std::shared_ptr<const Shape> shape);
   [[nodiscard]] Aabb slot_bounds(Index slot) const;
   /// The slot of a valid, not removed id, or an error naming `what` was called.
   [[nodiscard]] Result<Index> live_slot(BodyId id, const char* what) const;

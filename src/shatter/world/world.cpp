@@ -127,11 +127,19 @@ World::World(const WorldSettings& settings) : settings_(settings) {
   world_id_ = next_id.fetch_add(1);
 }
 
+void World::set_shape(Body& b, std::shared_ptr<const Shape> shape) {
+  SHATTER_CHECK(shape != nullptr);
+  b.local_bounds = shape->local_bounds;
+  b.radius = shape->radius;
+  b.is_plane = shape->is_plane;
+  b.shape = std::move(shape);
+}
+
 Index World::add(const BodyDef& def, std::shared_ptr<const Shape> shape, std::shared_ptr<const BodyModel> model) {
   Body body;
   body.type = def.type;
   body.model = std::move(model);
-  body.shape = std::move(shape);
+  set_shape(body, std::move(shape));
   if (def.type == BodyType::dynamic) body.inertia = rigid_inertia(body.model->mass);
   body.rigid = def.rigid;
   body.rigid.orientation.normalize();
@@ -496,13 +504,13 @@ Aabb World::bounds(BodyId id) const {
 
 Aabb World::slot_bounds(Index slot) const {
   const Body& b = bodies_[slot];
-  if (b.shape->is_plane) {
+  if (b.is_plane) {
     Aabb all;
     all.min.setConstant(-std::numeric_limits<double>::infinity());
     all.max.setConstant(std::numeric_limits<double>::infinity());
     return all;
   }
-  Aabb box = transform_box(b.shape->local_bounds, transform_of(b.rigid));
+  Aabb box = transform_box(b.local_bounds, transform_of(b.rigid));
   if (b.deform) {  // the nodes, and the rest pieces at the best-fit pose the contact solver sees
     box.min = box.min.cwiseMin(b.deform->box.min);
     box.max = box.max.cwiseMax(b.deform->box.max);
@@ -527,7 +535,7 @@ bool World::pair_excluded(Index a, Index b) const { return contains_pair(exclude
 double World::motion_bound(const Body& b) const {
   if (b.type == BodyType::static_body || !b.awake) return 0;
   if (b.deform) return settings_.time_step * b.deform->max_speed;
-  return settings_.time_step * (b.rigid.linear_velocity.norm() + b.rigid.angular_velocity.norm() * b.shape->radius);
+  return settings_.time_step * (b.rigid.linear_velocity.norm() + b.rigid.angular_velocity.norm() * b.radius);
 }
 
 void World::find_pairs(std::vector<PairRef>& pairs) {
@@ -536,15 +544,15 @@ void World::find_pairs(std::vector<PairRef>& pairs) {
   boxes_.resize(n);
   for (Index i = 0; i < n; ++i) {
     const Body& b = bodies_[i];
-    boxes_[i] = b.shape->is_plane || b.removed ? Aabb{} : grow(slot_bounds(i), half_margin + motion_bound(b));
+    boxes_[i] = b.is_plane || b.removed ? Aabb{} : grow(slot_bounds(i), half_margin + motion_bound(b));
   }
   pairs.clear();
   for (const BodyPair& p : broad_phase_.find_pairs(boxes_)) pairs.push_back({p.first, p.second});
   for (Index p = 0; p < n; ++p) {
-    if (!bodies_[p].shape->is_plane) continue;
+    if (!bodies_[p].is_plane) continue;
     const Plane& plane = bodies_[p].shape->plane;
     for (Index i = 0; i < n; ++i) {
-      if (bodies_[i].shape->is_plane || boxes_[i].empty() || bodies_[i].type == BodyType::static_body) continue;
+      if (bodies_[i].is_plane || boxes_[i].empty() || bodies_[i].type == BodyType::static_body) continue;
       const Vec3 centre = 0.5 * (boxes_[i].min + boxes_[i].max);
       const Vec3 half = 0.5 * (boxes_[i].max - boxes_[i].min);
       const double lowest = plane.normal.dot(centre) - plane.normal.cwiseAbs().dot(half) - plane.offset;
@@ -1196,7 +1204,7 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
     auto shape = r.cracks.empty() ? shape_from_clusters(body.shape->piece_tets, *child.model)
                                   : inherit_shape(*body.shape, child);
     if (shape) {
-      body.shape = std::move(*shape);
+      set_shape(body, std::move(*shape));
       // Its contacts were found with the old shape: find them again.
       for (Contact& c : contacts_)
         if (c.body_a == id || c.body_b == id) c.origin.margin = -1;
