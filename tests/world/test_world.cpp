@@ -432,6 +432,34 @@ TEST(World, CrackSiblingsTouchOnlyAfterTheyFirstComeApart) {
   EXPECT_LT(w.rigid_state(a).position.x(), -0.01);  // struck and pushed along -x
 }
 
+TEST(World, CrackSiblingsStayExcludedWhileTheySleep) {
+  // The same overlapping pair falls asleep while another body keeps the world stepping; woken,
+  // they are still excluded, not pushed apart at speed.
+  World w(scenes::settings(true));
+  add_ground(w);
+  auto model = scenes::box_model(Vec3::Constant(0.1));
+  const BodyId a = add_dynamic(w, model, Vec3(0, 0.1, 0));
+  const BodyId b = add_dynamic(w, model, Vec3(0.19, 0.1, 0));
+  ASSERT_OK(w.exclude_until_apart(a, b));
+  BodyDef spinner;
+  spinner.rigid.position = Vec3(3, 0.1, 0);
+  spinner.rigid.angular_velocity = Vec3(0, 5, 0);
+  spinner.surface.friction = 0;
+  spinner.can_sleep = false;
+  (void)*w.add_body(model, spinner);
+  for (int i = 0; i < 120; ++i) w.step();
+  ASSERT_FALSE(w.awake(a));
+  ASSERT_FALSE(w.awake(b));
+  ASSERT_OK(w.wake(a));
+  double fastest = 0;
+  for (int i = 0; i < 30; ++i) {
+    w.step();
+    fastest = std::max({fastest, w.rigid_state(a).linear_velocity.norm(), w.rigid_state(b).linear_velocity.norm()});
+  }
+  EXPECT_LT(fastest, 0.01);  // m/s
+  EXPECT_NEAR(w.rigid_state(b).position.x() - w.rigid_state(a).position.x(), 0.19, 1e-3);
+}
+
 TEST(World, KinematicBodyPushesAndWakesWhatItTouches) {
   World w(scenes::settings(true));
   add_ground(w);

@@ -764,7 +764,11 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     std::vector<Contact>& found = pair_contacts_[k];
     if (contains_pair(until_apart_, pairs[k].a, pairs[k].b)) {
-      if (!found.empty()) still_together.push_back({pairs[k].a, pairs[k].b});
+      // Both asleep, nothing moved: they are as together as they were. (Their contacts are never
+      // kept, so the narrow phase had none to carry over, and they would have counted as apart:
+      // woken, pieces still overlapping along their crack would then be pushed apart at speed.)
+      const bool asleep = !bodies_[pairs[k].a].awake && !bodies_[pairs[k].b].awake;
+      if (!found.empty() || asleep) still_together.push_back({pairs[k].a, pairs[k].b});
       continue;
     }
     if (pair_reused_[k]) {  // warm-started already
