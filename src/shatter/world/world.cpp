@@ -81,6 +81,14 @@ double relative_motion(const ContactOrigin& o, const Vec3& offset, const Quat& r
 
 bool key_less(const Contact& x, const Contact& y) { return contact_key(x) < contact_key(y); }
 
+// Warm start of a manifold's friction and twist from the same manifold's last step `old`: its
+// impulses re-expressed in cc's tangents (set before) and about cc's normal.
+void carry_friction(ContactConstraint& cc, const ContactConstraint& old) {
+  const Vec3 f = old.friction_impulse.x() * old.tangents[0] + old.friction_impulse.y() * old.tangents[1];
+  cc.friction_impulse = {f.dot(cc.tangents[0]), f.dot(cc.tangents[1])};
+  cc.twist_impulse = old.twist_impulse * old.normal.dot(cc.normal);
+}
+
 // Union-find root with path halving.
 Index find_root(std::vector<Index>& parent, Index i) {
   while (parent[i] != i) {
@@ -631,9 +639,8 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
         // the margin they were found with (a point moved at most `moved` closer since).
         const double reuse = std::isfinite(settings_.contact_reuse_distance) ? settings_.contact_reuse_distance : 0.0;
         if (reuse > 0 && first_old != old_end && !a.deform && !b.deform && first_old->origin.margin >= 0) {
-          const double moved =
-              relative_motion(first_old->origin, offset, rotation, a.shape->is_plane ? -1 : a.shape->radius,
-                              b.shape->is_plane ? -1 : b.shape->radius);
+          const double moved = relative_motion(first_old->origin, offset, rotation, a.is_plane ? -1 : a.radius,
+                                               b.is_plane ? -1 : b.radius);
           if (moved <= reuse && spec + moved <= first_old->origin.margin) {
             for (auto it = first_old; it != old_end; ++it) {
               // A copy of the last step's contact (its pieces, separating-axis cache, origin and
@@ -643,12 +650,9 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
               ContactConstraint& cc = c.constraint;
               const ContactOrigin& o = it->origin;
               cc.normal = ta.rotation * o.normal_a;
-              // Warm start from its own impulses, the friction re-expressed in the new tangents (as
-              // the gather below does for contacts found afresh).
-              const Vec3 f = cc.friction_impulse.x() * cc.tangents[0] + cc.friction_impulse.y() * cc.tangents[1];
-              cc.twist_impulse *= it->constraint.normal.dot(cc.normal);
+              // Warm start from its own impulses (as the gather below does for contacts found afresh).
               cc.tangents = tangent_basis(cc.normal);
-              cc.friction_impulse = {f.dot(cc.tangents[0]), f.dot(cc.tangents[1])};
+              carry_friction(cc, it->constraint);
               cc.total_friction_impulse.setZero();
               cc.total_twist_impulse = 0;
               for (int i = 0; i < cc.count; ++i) {
@@ -794,9 +798,7 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
           p.normal_impulse = match->normal_impulse;
           if (!manifold_matched) {
             manifold_matched = true;
-            const Vec3 f = oc.friction_impulse.x() * oc.tangents[0] + oc.friction_impulse.y() * oc.tangents[1];
-            cc.friction_impulse = {f.dot(cc.tangents[0]), f.dot(cc.tangents[1])};
-            cc.twist_impulse = oc.twist_impulse * oc.normal.dot(cc.normal);
+            carry_friction(cc, oc);
           }
           break;
         }
