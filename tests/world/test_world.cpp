@@ -409,15 +409,21 @@ TEST(World, FiltersAndExclusionsDecideWhoTouches) {
   }
 }
 
-TEST(World, CrackSiblingsTouchOnlyAfterTheyFirstComeApart) {
-  // Two boxes on the ground born overlapping by 1 cm (as siblings of a crack may be): excluded
-  // until apart, they are not pushed apart. Once one is moved clear and slid back, they collide.
-  World w(scenes::settings(false));
-  add_ground(w);
-  auto model = scenes::box_model(Vec3::Constant(0.1));
+// Two 0.2 m boxes on the ground overlapping by 1 cm (as siblings of a crack may be born), excluded
+// from each other until they come apart.
+std::array<BodyId, 2> add_overlapping_siblings(World& w, const std::shared_ptr<const BodyModel>& model) {
   const BodyId a = add_dynamic(w, model, Vec3(0, 0.1, 0));
   const BodyId b = add_dynamic(w, model, Vec3(0.19, 0.1, 0));
-  ASSERT_OK(w.exclude_until_apart(a, b));
+  EXPECT_TRUE(w.exclude_until_apart(a, b).ok());
+  return {a, b};
+}
+
+TEST(World, CrackSiblingsTouchOnlyAfterTheyFirstComeApart) {
+  // Excluded until apart, the overlapping boxes are not pushed apart. Once one is moved clear and
+  // slid back, they collide.
+  World w(scenes::settings(false));
+  add_ground(w);
+  const auto [a, b] = add_overlapping_siblings(w, scenes::box_model(Vec3::Constant(0.1)));
   for (int i = 0; i < 60; ++i) w.step();
   EXPECT_NEAR(w.rigid_state(a).position.x(), 0.0, 1e-4);
   EXPECT_NEAR(w.rigid_state(b).position.x(), 0.19, 1e-4);
@@ -438,9 +444,7 @@ TEST(World, CrackSiblingsStayExcludedWhileTheySleep) {
   World w(scenes::settings(true));
   add_ground(w);
   auto model = scenes::box_model(Vec3::Constant(0.1));
-  const BodyId a = add_dynamic(w, model, Vec3(0, 0.1, 0));
-  const BodyId b = add_dynamic(w, model, Vec3(0.19, 0.1, 0));
-  ASSERT_OK(w.exclude_until_apart(a, b));
+  const auto [a, b] = add_overlapping_siblings(w, model);
   BodyDef spinner;
   spinner.rigid.position = Vec3(3, 0.1, 0);
   spinner.rigid.angular_velocity = Vec3(0, 5, 0);
