@@ -10,7 +10,10 @@ namespace shatter {
 namespace {
 
 // Green strain E = (F^T F - I) / 2 (docs/method.md §2.1).
-Mat3 green_strain(const Mat3& F) { return 0.5 * (F.transpose() * F - Mat3::Identity()); }
+// The small kernels below are flattened: GCC at -O2 leaves Eigen's fixed-size 3x3 products and
+// sums as calls, which cost more than their arithmetic. Inlining keeps every operation and its
+// order, so the results are the same bits.
+[[gnu::flatten]] Mat3 green_strain(const Mat3& F) { return 0.5 * (F.transpose() * F - Mat3::Identity()); }
 
 // S = 2 mu E + lambda tr(E) I.
 Mat3 stvk_S(const Lame& l, const Mat3& E) { return 2.0 * l.mu * E + l.lambda * E.trace() * Mat3::Identity(); }
@@ -98,7 +101,7 @@ bool polar_rotation_newton(const Mat3& F, Mat3& R) {
 
 }  // namespace
 
-Polar polar_decomposition(const Mat3& F) {
+[[gnu::noinline]] Polar polar_decomposition(const Mat3& F) {
   Mat3 R;
   if (polar_rotation_newton(F, R)) {
     Polar p;
@@ -119,7 +122,7 @@ Polar polar_decomposition(const Mat3& F) {
   return p;
 }
 
-double energy_density(ModelKind kind, const Lame& l, const Mat3& F) {
+[[gnu::flatten]] double energy_density(ModelKind kind, const Lame& l, const Mat3& F) {
   switch (kind) {
     case ModelKind::stvk: {
       // psi = mu tr(E^2) + lambda/2 tr(E)^2
@@ -142,7 +145,7 @@ double energy_density(ModelKind kind, const Lame& l, const Mat3& F) {
   return 0;
 }
 
-Mat3 first_piola(ModelKind kind, const Lame& l, const Mat3& F) {
+[[gnu::flatten]] Mat3 first_piola(ModelKind kind, const Lame& l, const Mat3& F) {
   switch (kind) {
     case ModelKind::stvk: return F * stvk_S(l, green_strain(F));  // P = F S
     case ModelKind::linear: {
