@@ -438,8 +438,10 @@ const char* to_string(ImpactHold hold) {
 StaticSolverOptions default_impact_solver_options() {
   StaticSolverOptions o;
   o.warm_start = false;
-  // An impact's stresses decide cracks at a few per cent: 1e-6 of the load is plenty.
-  o.relative_residual_tolerance = 1e-6;
+  // An impact's stresses decide cracks at a few per cent: 1e-5 of the load is plenty. In the
+  // reference scenes every analysed stress is within 1e-5 of what 1e-6 gives, with the same cracks,
+  // and many impacts save a Newton iteration (the lower cinder block's: 1.1e-6 after two).
+  o.relative_residual_tolerance = 1e-5;
   // StVK bodies use the projected stiffness: under a contact's concentrated load the exact one is
   // indefinite in many iterations, and the exact steps carry the solve further into StVK's
   // compressive softening (docs/solver.md: a StVK clay teddy's first drop tears instead of
