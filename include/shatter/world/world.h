@@ -492,8 +492,14 @@ class World {
   /// (ImpactChild::unchanged_parent_tet) keeps its parent's hull, moved into the child's frame.
   [[nodiscard]] Result<std::shared_ptr<const Shape>> inherit_shape(const Shape& parent, const ImpactChild& child) const;
   void process_impacts();
-  /// Replace body id by the outcome of its impact analysis; records the events.
-  void apply_impact(Index id, Index other, ImpactResult& r);
+  /// The collision shape of one child of body `slot`'s impact result `r`: a dented body's clusters
+  /// over its new nodes, a cracked body's pieces inherited.
+  [[nodiscard]] Result<std::shared_ptr<const Shape>> child_shape(Index slot, const ImpactResult& r,
+                                                                 const ImpactChild& child) const;
+  /// Replace body id by the outcome of its impact analysis; records the events. `shapes`: one per
+  /// child of r, as child_shape gives them (empty: built here).
+  void apply_impact(Index id, Index other, ImpactResult& r,
+                    std::vector<Result<std::shared_ptr<const Shape>>> shapes = {});
   [[nodiscard]] double motion_bound(const Body& b) const;
   void find_pairs(std::vector<PairRef>& pairs);
   void narrow_phase(const std::vector<PairRef>& pairs);

@@ -1120,6 +1120,24 @@ void World::process_impacts() {
         results[k] = analyze_impact(*body.model, state, contacts_of[k], settings);
       },
       /*min_parallel=*/2);
+  // The children's collision shapes (their convex hulls) side by side too: each reads only its
+  // parent's shape and its own model.
+  std::vector<std::array<std::size_t, 2>> children;  // (analysis, child)
+  for (std::size_t k = 0; k < analyse.size(); ++k)
+    if (*results[k] && (*results[k])->analysed)
+      for (std::size_t c = 0; c < (*results[k])->children.size(); ++c) children.push_back({k, c});
+  std::vector<std::vector<Result<std::shared_ptr<const Shape>>>> shapes(analyse.size());
+  for (std::size_t k = 0; k < analyse.size(); ++k)
+    if (*results[k] && (*results[k])->analysed)
+      shapes[k].resize((*results[k])->children.size(), make_error("not built"));
+  parallel_for(
+      0, static_cast<std::int64_t>(children.size()),
+      [&](std::int64_t i) {
+        const auto [k, c] = children[static_cast<std::size_t>(i)];
+        const ImpactResult& r = **results[k];
+        shapes[k][c] = child_shape(analyse[k].first, r, r.children[c]);
+      },
+      /*min_parallel=*/2);
   for (std::size_t k = 0; k < analyse.size(); ++k) {
     const auto [id, other_id] = analyse[k];
     Result<ImpactResult>& result = *results[k];
@@ -1127,7 +1145,7 @@ void World::process_impacts() {
       log_warning("world: the impact analysis of body " + std::to_string(id) + " failed: " + result.error().message);
     if (!result || !result->analysed) continue;
     ++stats_.impacts;
-    apply_impact(id, other_id, *result);
+    apply_impact(id, other_id, *result, std::move(shapes[k]));
   }
   for (OpenImpact& e : open_impacts_)
     if (e.analysed) e.points.clear();
@@ -1157,7 +1175,18 @@ void World::forget_removed() {
                 [&](const OpenImpact& e) { return bodies_[e.pair[0]].removed || bodies_[e.pair[1]].removed; });
 }
 
-void World::apply_impact(Index id, Index other, ImpactResult& r) {
+Result<std::shared_ptr<const World::Shape>> World::child_shape(Index slot, const ImpactResult& r,
+                                                               const ImpactChild& child) const {
+  const Body& body = bodies_[slot];
+  // A dent keeps the tets (the pieces keep theirs); a crack's pieces come from the old clusters.
+  if (r.children.size() == 1 && r.cracks.empty()) return shape_from_clusters(body.shape->piece_tets, *child.model);
+  return inherit_shape(*body.shape, child);
+}
+
+void World::apply_impact(Index id, Index other, ImpactResult& r,
+                         std::vector<Result<std::shared_ptr<const Shape>>> shapes) {
+  if (shapes.empty())
+    for (const ImpactChild& child : r.children) shapes.push_back(child_shape(id, r, child));
   ImpactRecord rec;
   rec.body = body_id(id);
   rec.other = other < 0 ? BodyId{} : body_id(other);
@@ -1203,12 +1232,10 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
     return;
   }
   if (r.children.size() == 1) {
-    // Dented, or cracked but whole: the body goes on under its id with the new model. A dent keeps
-    // the tets (the pieces keep theirs); a crack's pieces come from the old clusters.
+    // Dented, or cracked but whole: the body goes on under its id with the new model.
     Body& body = bodies_[id];
     ImpactChild& child = r.children.front();
-    auto shape = r.cracks.empty() ? shape_from_clusters(body.shape->piece_tets, *child.model)
-                                  : inherit_shape(*body.shape, child);
+    auto& shape = shapes.front();
     if (shape) {
       set_shape(body, std::move(*shape));
       // Its contacts were found with the old shape: find them again.
@@ -1235,8 +1262,9 @@ void World::apply_impact(Index id, Index other, ImpactResult& r) {
   // the whole body went as debris.)
   const Body parent = bodies_[id];
   std::vector<Index> born;
-  for (ImpactChild& child : r.children) {
-    auto shape = inherit_shape(*parent.shape, child);
+  for (std::size_t c = 0; c < r.children.size(); ++c) {
+    ImpactChild& child = r.children[c];
+    auto& shape = shapes[c];
     if (!shape) {  // a piece without a collision shape cannot take part: it goes as debris
       log_warning("world: a fragment of body " + std::to_string(id) + " became debris: " + shape.error().message);
       rec.debris_count += 1;
