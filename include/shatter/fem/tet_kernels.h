@@ -39,6 +39,10 @@ Mat12 tet_stiffness_from_differential(ModelKind kind, const Lame& lame, const Te
 /// Symmetric part of K with negative eigenvalues clamped to 0. When that symmetric part is
 /// already positive semi-definite it is returned as is.
 Mat12 project_psd(const Mat12& K);
+/// StVK's tet_stiffness with the negative part of S = 2 mu E + lambda tr(E) I removed from its
+/// geometric term V (B S B^T) (x) I (the material term is positive semi-definite): positive
+/// semi-definite, exact where S is. Symmetric to the last bit.
+Mat12 stvk_projected_stiffness(const Lame& lame, const TetRest& rest, const Mat34& x);
 
 /// Cauchy (true) stress sigma = P F^T / det F, Pa; for the linear model the small-strain stress
 /// 2 mu eps + lambda tr(eps) I.

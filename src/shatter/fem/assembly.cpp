@@ -224,35 +224,13 @@ void BlockSparseMatrix::finish_fill() {
   for (Index p : held_diagonal_) values()[p] = 1.0;
 }
 
-// Flattened: GCC at -O2 leaves Eigen's fixed-size 3x3 arithmetic as calls (the same operations
-// inlined: the same bits).
-[[gnu::flatten]] Mat12 element_stiffness(const FemModel& model, Index e, const Mat34& xe, bool make_psd) {
+Mat12 element_stiffness(const FemModel& model, Index e, const Mat34& xe, bool make_psd) {
+  // StVK: K = K_material + V (B S B^T) (x) I; the material part is PSD (mu > 0, bulk modulus > 0),
+  // the geometric part is PSD iff S is, so the projection removes the negative part of S from it.
+  if (make_psd && model.model == ModelKind::stvk) return stvk_projected_stiffness(model.lame, model.rest[e], xe);
   Mat12 k = tet_stiffness(model.model, model.lame, model.rest[e], xe);
-  if (make_psd) {
-    switch (model.model) {
-      case ModelKind::linear: break;  // constant and positive semi-definite
-      case ModelKind::stvk: {
-        // K = K_material + V (B S B^T) (x) I: the material part is PSD (mu > 0, bulk modulus > 0),
-        // the geometric part is PSD iff S is. Remove the negative part of S from it.
-        const Mat3 F = deformation_gradient(model.rest[e], xe);
-        const Mat3 E = 0.5 * (F.transpose() * F - Mat3::Identity());
-        const Mat3 S = 2.0 * model.lame.mu * E + model.lame.lambda * E.trace() * Mat3::Identity();
-        Eigen::SelfAdjointEigenSolver<Mat3> eig;
-        eig.computeDirect(S);
-        if (eig.eigenvalues()[0] >= 0.0) break;
-        Mat3 negative = Mat3::Zero();
-        for (int q = 0; q < 3; ++q)
-          if (eig.eigenvalues()[q] < 0.0)
-            negative += eig.eigenvalues()[q] * eig.eigenvectors().col(q) * eig.eigenvectors().col(q).transpose();
-        const Mat43 B = shape_gradients(model.rest[e]);
-        const Mat4 g = model.rest[e].volume * (B * negative * B.transpose());
-        for (int i = 0; i < 4; ++i)
-          for (int j = 0; j < 4; ++j) k.block<3, 3>(3 * i, 3 * j).diagonal().array() -= g(i, j);
-        break;
-      }
-      case ModelKind::corotated: k = project_psd(k); break;
-    }
-  }
+  // The linear model's is constant and positive semi-definite.
+  if (make_psd && model.model == ModelKind::corotated) k = project_psd(k);
   return 0.5 * (k + k.transpose());  // exactly symmetric: the storage relies on it
 }
 

@@ -142,6 +142,28 @@ Mat12 tet_stiffness(ModelKind kind, const Lame& lame, const TetRest& rest, const
   return tet_stiffness_from_differential(kind, lame, rest, x);
 }
 
+// Flattened (see deformation_gradient).
+[[gnu::flatten]] Mat12 stvk_projected_stiffness(const Lame& lame, const TetRest& rest, const Mat34& x) {
+  // F, E, S and B once for both terms.
+  const Mat3 F = deformation_gradient(rest, x);
+  const Mat3 E = 0.5 * (F.transpose() * F - Mat3::Identity());
+  const Mat3 S = 2.0 * lame.mu * E + lame.lambda * E.trace() * Mat3::Identity();
+  const Mat43 B = shape_gradients(rest);
+  Mat12 k = stiffness_closed_form(lame, rest.volume, B, F, S);
+  Eigen::SelfAdjointEigenSolver<Mat3> eig;
+  eig.computeDirect(S);
+  if (eig.eigenvalues()[0] < 0.0) {
+    Mat3 negative = Mat3::Zero();
+    for (int q = 0; q < 3; ++q)
+      if (eig.eigenvalues()[q] < 0.0)
+        negative += eig.eigenvalues()[q] * eig.eigenvectors().col(q) * eig.eigenvectors().col(q).transpose();
+    const Mat4 g = rest.volume * (B * negative * B.transpose());
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) k.block<3, 3>(3 * i, 3 * j).diagonal().array() -= g(i, j);
+  }
+  return 0.5 * (k + k.transpose());
+}
+
 Mat12 project_psd(const Mat12& K) {
   const Mat12 Ks = 0.5 * (K + K.transpose());
   const Eigen::SelfAdjointEigenSolver<Mat12> eig(Ks);
