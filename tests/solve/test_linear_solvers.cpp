@@ -13,6 +13,7 @@
 #include "shatter/core/random.h"
 #include "shatter/fem/assembly.h"
 #include "shatter/fem/fem_model.h"
+#include "shatter/solve/block_ldlt.h"
 #include "shatter/solve/linear_solvers.h"
 #include "solve_test_util.h"
 #include "support/test_support.h"
@@ -468,6 +469,61 @@ TEST(LinearSolvers, DirectReusesItsFactorizationForNearbyMatrices) {
   rep = direct.solve(m, b, x);
   EXPECT_TRUE(rep.factorized);
   EXPECT_LE(rep.relative_residual, 1e-12);
+}
+
+// The block LDL^T needs no positive definiteness: an indefinite, non-singular system is solved to
+// round-off, and the factorization says it is not positive definite.
+TEST(BlockLdlt, SolvesIndefiniteSystemsAndSaysSo) {
+  const TetMesh mesh = test::box(Vec3(1.0, 0.6, 0.4), {4, 3, 3}, 0.2);
+  BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, mixed_anchors(mesh));
+  std::vector<Mat12> ke = random_spd_elements(mesh.tets.size(), 5);
+  for (Mat12& k : ke) k -= 3.0 * Mat12::Identity();  // some directions of the sum now negative
+  m.refill([&](Index e) { return ke[e]; });
+  const Eigen::MatrixXd dense(m.matrix());
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(dense);
+  ASSERT_LT(eig.eigenvalues().minCoeff(), 0.0);
+  ASSERT_GT(eig.eigenvalues().cwiseAbs().minCoeff(), 1e-6);
+  BlockLdlt ldlt;
+  ldlt.analyze(m);
+  ASSERT_TRUE(ldlt.factorize(m));
+  EXPECT_FALSE(ldlt.positive_definite());
+  Random rng(3);
+  Eigen::VectorXd b(m.size()), x;
+  for (Index i = 0; i < m.size(); ++i) b[i] = rng.uniform(-1.0, 1.0);
+  ldlt.solve(b, x);
+  const Eigen::VectorXd reference = dense.fullPivLu().solve(b);
+  EXPECT_LE((x - reference).norm(), 1e-9 * reference.norm());
+  // The scalar fill it reports: 3 per block column's diagonal block and 9 per block below it.
+  EXPECT_GT(ldlt.factor_nonzeros(), 0.0);
+  EXPECT_GT(ldlt.factor_flops(), ldlt.factor_nonzeros());
+}
+
+// A factorization leaves nothing behind: refactorizing after another matrix gives the bits of a
+// fresh solver, and a positive definite matrix is reported as one.
+TEST(BlockLdlt, RefactorizingGivesTheBitsOfAFreshFactorization) {
+  const TetMesh mesh = test::box(Vec3(1.0, 0.6, 0.4), {5, 3, 3}, 0.2);
+  BlockSparseMatrix first(mesh.num_nodes(), mesh.tets, held_at_x0(mesh));
+  BlockSparseMatrix second(mesh.num_nodes(), mesh.tets, held_at_x0(mesh));
+  const std::vector<Mat12> k1 = random_spd_elements(mesh.tets.size(), 7);
+  const std::vector<Mat12> k2 = random_spd_elements(mesh.tets.size(), 8);
+  first.refill([&](Index e) { return k1[e]; });
+  second.refill([&](Index e) { return k2[e]; });
+  const Eigen::VectorXd b = Eigen::VectorXd::LinSpaced(second.size(), -1.0, 2.0);
+  BlockLdlt reused, fresh;
+  reused.analyze(first);
+  ASSERT_TRUE(reused.factorize(first));
+  EXPECT_TRUE(reused.positive_definite());
+  ASSERT_TRUE(reused.factorize(second));
+  fresh.analyze(second);
+  ASSERT_TRUE(fresh.factorize(second));
+  Eigen::VectorXd x1, x2;
+  reused.solve(b, x1);
+  fresh.solve(b, x2);
+  ASSERT_EQ(x1.size(), x2.size());
+  EXPECT_EQ(std::memcmp(x1.data(), x2.data(), sizeof(double) * static_cast<std::size_t>(x1.size())), 0);
+  Eigen::VectorXd ax;
+  second.multiply(x1, ax);
+  EXPECT_LE((ax - b).norm(), 1e-12 * b.norm());
 }
 
 TEST(LinearSolvers, BadInputGivesReportNotNaN) {

@@ -1,10 +1,10 @@
 // Linear solvers for Newton's system K dx = r on a BlockSparseMatrix (docs/method.md §2.3, the paper's
 // §3.3): preconditioned conjugate gradients (3x3-block Jacobi, or symmetric block Gauss-Seidel) and
-// a sparse LDL^T factorization whose symbolic analysis is reused while the pattern stays the same.
+// a sparse LDL^T factorization in 3x3 blocks whose symbolic analysis is reused while the pattern
+// stays the same.
 #pragma once
 
 #include <Eigen/Cholesky>
-#include <Eigen/SparseCholesky>
 
 #include <cstdint>
 #include <string>
@@ -14,12 +14,13 @@
 
 #include "shatter/core/error.h"
 #include "shatter/fem/assembly.h"
+#include "shatter/solve/block_ldlt.h"
 
 namespace shatter {
 
 /// The linear solver used for Newton's system.
 enum class LinearSolverKind {
-  direct_ldlt,             ///< Eigen::SimplicialLDLT, AMD ordering; analyzePattern once per pattern
+  direct_ldlt,             ///< BlockLdlt (3x3 blocks, AMD ordering); the analysis once per pattern
   pcg_block_jacobi,        ///< CG preconditioned by the inverse 3x3 diagonal blocks
   pcg_block_gauss_seidel,  ///< CG preconditioned by one forward + one backward block Gauss-Seidel
                            ///< sweep (M = (D+L) D^-1 (D+U): symmetric positive definite)
@@ -77,17 +78,6 @@ struct LinearSolveReport {
   bool indefinite = false;
   std::string message;  ///< why it did not converge ("" when it did)
 };
-
-namespace detail {
-/// Eigen's simplicial LDL^T with the column counts of its symbolic analysis made readable.
-class CountingLdlt : public Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
- public:
-  /// Nonzeros of L below the diagonal (after analyzePattern).
-  [[nodiscard]] double factor_nonzeros() const;
-  /// About the multiply-adds of one numeric factorization: sum over columns of count^2.
-  [[nodiscard]] double factor_flops() const;
-};
-}  // namespace detail
 
 /// What a direct solve of a pattern would cost (LinearSolver::direct_cost), from its symbolic
 /// analysis: deterministic, unlike a time.
@@ -172,7 +162,7 @@ class LinearSolver {
   bool solve_with_kept_factor(const BlockSparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x,
                               int max_iterations, LinearSolveReport& report);
 
-  detail::CountingLdlt ldlt_;
+  BlockLdlt ldlt_;
   std::uint64_t analyzed_pattern_ = 0;
   std::uint64_t factored_pattern_ = 0;  ///< pattern of a kept positive definite factorization (0: none)
   int reuse_failures_ = 0;              ///< reuse attempts that failed in a row

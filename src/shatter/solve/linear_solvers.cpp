@@ -63,26 +63,10 @@ LinearSolveReport LinearSolver::solve(const BlockSparseMatrix& a, const Eigen::V
   return report;
 }
 
-namespace detail {
-
-double CountingLdlt::factor_nonzeros() const {
-  double n = 0;
-  for (const auto count : m_nonZerosPerCol) n += static_cast<double>(count);
-  return n;
-}
-
-double CountingLdlt::factor_flops() const {
-  double f = 0;
-  for (const auto count : m_nonZerosPerCol) f += static_cast<double>(count) * static_cast<double>(count);
-  return f;
-}
-
-}  // namespace detail
-
 void LinearSolver::analyze(const BlockSparseMatrix& a, LinearSolveReport* report) {
   // The ordering and elimination tree depend only on the pattern: analyse once per pattern.
   if (analyzed_pattern_ == a.pattern_id()) return;
-  ldlt_.analyzePattern(a.matrix());
+  ldlt_.analyze(a);
   analyzed_pattern_ = a.pattern_id();
   factored_pattern_ = 0;  // the analysis drops the numeric factorization
   ++symbolic_analyses_;
@@ -131,7 +115,7 @@ bool LinearSolver::solve_with_kept_factor(const BlockSparseMatrix& a, const Eige
   x.setZero(a.size());
   r_ = b;
   const CgEnd end = conjugate_gradients(a, x, target, max_iterations,
-                                        [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) { z = ldlt_.solve(r); });
+                                        [&](const Eigen::VectorXd& r, Eigen::VectorXd& z) { ldlt_.solve(r, z); });
   // A breakdown is left to the factorization to decide (and report).
   if (end.breakdown || !(end.residual_norm <= target) || !all_finite(x)) return false;
   report.iterations = end.iterations;
@@ -163,17 +147,17 @@ LinearSolveReport LinearSolver::solve_direct(const BlockSparseMatrix& a, const E
     }
   }
   factored_pattern_ = 0;
-  ldlt_.factorize(a.matrix());
+  const bool factored = ldlt_.factorize(a);
   report.factorized = true;
   report.iterations = 0;
-  if (ldlt_.info() != Eigen::Success) {
+  if (!factored) {
     x.setZero(a.size());
     report.message = "sparse LDL^T factorization failed (singular matrix: is the body anchored?)";
     return report;
   }
-  report.indefinite = !(ldlt_.vectorD().minCoeff() > 0.0);
+  report.indefinite = !ldlt_.positive_definite();
   if (!report.indefinite) factored_pattern_ = a.pattern_id();
-  x = ldlt_.solve(b);
+  ldlt_.solve(b, x);
   if (!all_finite(x)) {
     x.setZero(a.size());
     report.message = "sparse LDL^T solve gave non-finite values (singular matrix)";

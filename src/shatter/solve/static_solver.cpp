@@ -499,8 +499,8 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
   //  - more PCG iterations, as many as the rate of the first ones predicts: each a matrix-vector
   //    product, two Gauss-Seidel (or one Jacobi) sweeps over the stored values and a few vector
   //    updates;
-  //  - a factorization: its multiply-adds (counted twice: a simplicial factorization streams
-  //    memory less well) and two triangular solves;
+  //  - a factorization: the multiply-adds of a scalar LDL^T with its fill (counted twice) and two
+  //    triangular solves;
   //  - PCG with the two-level preconditioner (pcg_two_level), which removes what the sweeps leave
   //    at long wavelengths: per solve the coarse matrix and its factorization, then about
   //    kTwoLevelIterations iterations of twice a Gauss-Seidel iteration's work.

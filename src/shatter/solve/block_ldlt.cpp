@@ -1,0 +1,200 @@
+// Sparse LDL^T in 3x3 blocks (see block_ldlt.h).
+#include "shatter/solve/block_ldlt.h"
+
+#include <Eigen/OrderingMethods>
+#include <Eigen/SparseCore>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "shatter/core/assert.h"
+
+namespace shatter {
+namespace {
+
+// The 3x3 kernels, written out: GCC at -O2 leaves Eigen's fixed-size products as calls.
+// y -= l x
+inline void subtract_product(Mat3& y, const Mat3& l, const Mat3& x) {
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) y(r, c) -= l(r, 0) * x(0, c) + l(r, 1) * x(1, c) + l(r, 2) * x(2, c);
+}
+// x^T d (d symmetric)
+inline Mat3 transposed_product(const Mat3& x, const Mat3& d) {
+  Mat3 out;
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) out(r, c) = x(0, r) * d(0, c) + x(1, r) * d(1, c) + x(2, r) * d(2, c);
+  return out;
+}
+// z -= l v
+inline void subtract_product(Vec3& z, const Mat3& l, const Vec3& v) {
+  for (int r = 0; r < 3; ++r) z[r] -= l(r, 0) * v[0] + l(r, 1) * v[1] + l(r, 2) * v[2];
+}
+// z -= l^T v
+inline void subtract_transposed_product(Vec3& z, const Mat3& l, const Vec3& v) {
+  for (int r = 0; r < 3; ++r) z[r] -= l(0, r) * v[0] + l(1, r) * v[1] + l(2, r) * v[2];
+}
+
+// The inverse of a symmetric 3x3 pivot from its cofactors; false when it is singular or not finite.
+// `positive`: its leading minors are positive (the pivot is positive definite).
+bool invert_pivot(const Mat3& d, Mat3& inverse, bool& positive) {
+  const double c00 = d(1, 1) * d(2, 2) - d(1, 2) * d(2, 1);
+  const double c01 = d(1, 2) * d(2, 0) - d(1, 0) * d(2, 2);
+  const double c02 = d(1, 0) * d(2, 1) - d(1, 1) * d(2, 0);
+  const double det = d(0, 0) * c00 + d(0, 1) * c01 + d(0, 2) * c02;
+  if (!std::isfinite(det) || det == 0.0) return false;
+  const double s = 1.0 / det;
+  inverse(0, 0) = c00 * s;
+  inverse(1, 0) = c01 * s;
+  inverse(2, 0) = c02 * s;
+  inverse(0, 1) = (d(0, 2) * d(2, 1) - d(0, 1) * d(2, 2)) * s;
+  inverse(1, 1) = (d(0, 0) * d(2, 2) - d(0, 2) * d(2, 0)) * s;
+  inverse(2, 1) = (d(0, 1) * d(2, 0) - d(0, 0) * d(2, 1)) * s;
+  inverse(0, 2) = (d(0, 1) * d(1, 2) - d(0, 2) * d(1, 1)) * s;
+  inverse(1, 2) = (d(0, 2) * d(1, 0) - d(0, 0) * d(1, 2)) * s;
+  inverse(2, 2) = (d(0, 0) * d(1, 1) - d(0, 1) * d(1, 0)) * s;
+  positive = d(0, 0) > 0.0 && d(0, 0) * d(1, 1) - d(0, 1) * d(1, 0) > 0.0 && det > 0.0;
+  return inverse.allFinite();
+}
+
+}  // namespace
+
+void BlockLdlt::analyze(const BlockSparseMatrix& a) {
+  n_ = a.num_active();
+  const std::vector<Index>& ptr = a.block_ptr();
+  const std::vector<Index>& col = a.block_col();
+  // AMD on the node graph (Eigen's, on A + A^T of the block pattern).
+  Eigen::SparseMatrix<double> graph(n_, n_);
+  {
+    std::vector<Eigen::Triplet<double>> entries;
+    entries.reserve(static_cast<std::size_t>(a.num_blocks()));
+    for (Index r = 0; r < n_; ++r)
+      for (Index k = ptr[r]; k < ptr[r + 1]; ++k) entries.emplace_back(r, col[k], 1.0);
+    graph.setFromTriplets(entries.begin(), entries.end());
+  }
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> ordering;
+  Eigen::AMDOrdering<int>()(graph, ordering);  // ordering.indices()[new] = old
+  old_of_.assign(ordering.indices().data(), ordering.indices().data() + n_);
+  new_of_.assign(static_cast<std::size_t>(n_), 0);
+  for (Index k = 0; k < n_; ++k) new_of_[old_of_[k]] = k;
+
+  // Column k of P A P^T above its diagonal, rows ascending: the blocks (old i, old k) with
+  // new_of(i) < k, found in block row old i (the matrix stores both triangles).
+  upper_ptr_.assign(static_cast<std::size_t>(n_) + 1, 0);
+  diagonal_block_.assign(static_cast<std::size_t>(n_), -1);
+  std::vector<std::array<Index, 3>> upper;  // (column, row, block), new indices
+  upper.reserve(static_cast<std::size_t>(a.num_blocks()) / 2 + 1);
+  for (Index r = 0; r < n_; ++r) {
+    const Index nr = new_of_[r];
+    for (Index k = ptr[r]; k < ptr[r + 1]; ++k) {
+      const Index nc = new_of_[col[k]];
+      if (nc == nr) diagonal_block_[nr] = k;
+      if (nr < nc) upper.push_back({nc, nr, k});
+    }
+  }
+  std::sort(upper.begin(), upper.end());
+  upper_row_.resize(upper.size());
+  upper_block_.resize(upper.size());
+  for (std::size_t e = 0; e < upper.size(); ++e) {
+    ++upper_ptr_[upper[e][0] + 1];
+    upper_row_[e] = upper[e][1];
+    upper_block_[e] = upper[e][2];
+  }
+  for (Index k = 0; k < n_; ++k) upper_ptr_[k + 1] += upper_ptr_[k];
+
+  // Elimination tree and column counts of L (a scalar simplicial analysis, on blocks).
+  parent_.assign(static_cast<std::size_t>(n_), -1);
+  flag_.assign(static_cast<std::size_t>(n_), -1);
+  std::vector<Index> counts(static_cast<std::size_t>(n_), 0);
+  for (Index k = 0; k < n_; ++k) {
+    flag_[k] = k;
+    for (Index e = upper_ptr_[k]; e < upper_ptr_[k + 1]; ++e)
+      for (Index i = upper_row_[e]; flag_[i] != k; i = parent_[i]) {
+        if (parent_[i] == -1) parent_[i] = k;
+        ++counts[i];
+        flag_[i] = k;
+      }
+  }
+  l_ptr_.assign(static_cast<std::size_t>(n_) + 1, 0);
+  factor_nonzeros_ = factor_flops_ = 0;
+  for (Index k = 0; k < n_; ++k) {
+    l_ptr_[k + 1] = l_ptr_[k] + counts[k];
+    // The scalar columns of block column k hold 3c + 2, 3c + 1 and 3c entries below the diagonal.
+    const double c = 3.0 * static_cast<double>(counts[k]);
+    factor_nonzeros_ += 3.0 * c + 3.0;
+    factor_flops_ += (c + 2) * (c + 2) + (c + 1) * (c + 1) + c * c;
+  }
+  l_row_.resize(static_cast<std::size_t>(l_ptr_[n_]));
+  l_block_.resize(static_cast<std::size_t>(l_ptr_[n_]));
+  d_inverse_.resize(static_cast<std::size_t>(n_));
+  y_.assign(static_cast<std::size_t>(n_), Mat3::Zero());
+  pattern_.resize(static_cast<std::size_t>(n_));
+  count_.resize(static_cast<std::size_t>(n_));
+  z_.resize(static_cast<std::size_t>(n_));
+}
+
+bool BlockLdlt::factorize(const BlockSparseMatrix& a) {
+  SHATTER_CHECK(a.num_active() == n_);
+  positive_definite_ = true;
+  std::fill(count_.begin(), count_.end(), 0);
+  std::fill(flag_.begin(), flag_.end(), -1);
+  for (Index k = 0; k < n_; ++k) {
+    // Scatter column k above the diagonal into y; the rows of L's row k are those reached from
+    // its entries up the elimination tree, solved in topological order (pattern_[top..n)).
+    Index top = n_;
+    flag_[k] = k;
+    for (Index e = upper_ptr_[k]; e < upper_ptr_[k + 1]; ++e) {
+      Index i = upper_row_[e];
+      y_[i] = a.block(old_of_[i], upper_block_[e]);
+      Index len = 0;
+      for (; flag_[i] != k; i = parent_[i]) {
+        pattern_[len++] = i;
+        flag_[i] = k;
+      }
+      while (len > 0) pattern_[--top] = pattern_[--len];
+    }
+    Mat3 d = a.block(old_of_[k], diagonal_block_[k]);
+    for (; top < n_; ++top) {
+      // X_i = D_i L(k,i)^T is final here: push it into the rows below i, then L(k,i) = X_i^T D_i^-1
+      // and D_k -= L(k,i) X_i.
+      const Index i = pattern_[top];
+      const Mat3 x = y_[i];
+      y_[i].setZero();
+      const Index first = l_ptr_[i];
+      const Index end = first + count_[i];
+      for (Index p = first; p < end; ++p) subtract_product(y_[l_row_[p]], l_block_[p], x);
+      const Mat3 l = transposed_product(x, d_inverse_[i]);
+      subtract_product(d, l, x);
+      l_row_[end] = k;
+      l_block_[end] = l;
+      ++count_[i];
+    }
+    // d is symmetric up to round-off; its inverse from the symmetric part keeps D^-1 symmetric.
+    const Mat3 pivot = 0.5 * (d + d.transpose());
+    bool positive = false;
+    if (!invert_pivot(pivot, d_inverse_[k], positive)) return false;
+    positive_definite_ = positive_definite_ && positive;
+  }
+  return true;
+}
+
+void BlockLdlt::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
+  SHATTER_CHECK(b.size() == 3 * n_);
+  for (Index k = 0; k < n_; ++k) z_[k] = b.segment<3>(3 * old_of_[k]);
+  // L z = P b, column by column.
+  for (Index i = 0; i < n_; ++i)
+    for (Index p = l_ptr_[i]; p < l_ptr_[i] + count_[i]; ++p) subtract_product(z_[l_row_[p]], l_block_[p], z_[i]);
+  for (Index i = 0; i < n_; ++i) {
+    const Vec3 v = z_[i];
+    const Mat3& d = d_inverse_[i];
+    for (int r = 0; r < 3; ++r) z_[i][r] = d(r, 0) * v[0] + d(r, 1) * v[1] + d(r, 2) * v[2];
+  }
+  // L^T x' = z, backwards.
+  for (Index i = n_ - 1; i >= 0; --i)
+    for (Index p = l_ptr_[i]; p < l_ptr_[i] + count_[i]; ++p)
+      subtract_transposed_product(z_[i], l_block_[p], z_[l_row_[p]]);
+  x.resize(3 * n_);
+  for (Index k = 0; k < n_; ++k) x.segment<3>(3 * old_of_[k]) = z_[k];
+}
+
+}  // namespace shatter
