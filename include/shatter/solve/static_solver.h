@@ -121,6 +121,10 @@ struct StaticSolverOptions {
   /// symbolic analysis) and against PCG with the two-level preconditioner (pcg_two_level), by
   /// multiply-adds (deterministic), and use the cheapest for the rest of the solves on this pattern.
   bool direct_when_cheaper = true;
+  /// The caller knows the system is ill-conditioned (a body held at three nodes by inertia relief):
+  /// direct_when_cheaper chooses between the factorization and the two-level PCG at the first Newton
+  /// step without first running kMinIterationsForDirect Gauss-Seidel PCG iterations to find out.
+  bool ill_conditioned = false;
   /// PCG: the first Newton step of a load step starts from the previous first step d, scaled by
   /// (r.d)/(d.K d) (the energy-norm optimal multiple: never a worse start than zero). Repeated
   /// impacts at one place with other magnitudes then need few iterations.

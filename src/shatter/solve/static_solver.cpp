@@ -505,25 +505,16 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
   //    at long wavelengths: per solve the coarse matrix and its factorization, then about
   //    kTwoLevelIterations iterations of twice a Gauss-Seidel iteration's work.
   const int max_pcg = linear.max_iterations;
-  const bool weigh = pcg && options_.direct_when_cheaper && !direct_checked_ && max_pcg > kMinIterationsForDirect;
-  if (weigh) linear.max_iterations = kMinIterationsForDirect;
-  linear_.set_options(linear);
-  LinearSolveReport lin = linear_.solve(matrix_, st.r, st.dx);
-  if (weigh && !lin.converged && !lin.indefinite && lin.iterations == kMinIterationsForDirect) {
+  bool weigh = pcg && options_.direct_when_cheaper && !direct_checked_ && max_pcg > kMinIterationsForDirect;
+  // Choose the factorization, the two-level PCG or more of the same PCG (pcg_cost; +inf: not
+  // measured) by their costs, for this solve and the rest on this pattern.
+  const auto choose = [&](double pcg_cost) {
     direct_checked_ = true;
     const auto t = Clock::now();
     const DirectCost direct = linear_.direct_cost(matrix_);
     st.report.linear_solve_ms += ms_since(t);
-    // The iterations PCG still needs, from the rate of its first ones (relative residual = rate^k),
-    // at most its iteration limit. A residual that did not drop at all (CG's residual is not
-    // monotone) counts as the whole limit.
-    const double reached = std::clamp(lin.relative_residual, 1e-300, 0.999);
-    const double remaining = std::min(
-        static_cast<double>(max_pcg - kMinIterationsForDirect),
-        kMinIterationsForDirect * std::max(1.0, std::log(linear.relative_tolerance) / std::log(reached) - 1.0));
     const double values = static_cast<double>(matrix_.num_values());
     const double unknowns = static_cast<double>(matrix_.size());
-    const double pcg_cost = remaining * (4.0 * values + 10.0 * unknowns);
     const double direct_cost = 2.0 * direct.factor_flops + 4.0 * direct.factor_nonzeros;
     const double aggregates =
         std::clamp(std::floor(static_cast<double>(matrix_.num_active()) / std::max(1, linear.min_aggregate_nodes)), 1.0,
@@ -537,13 +528,34 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
     // What the two-level solves are held to (below).
     direct_cost_ = direct_cost;
     pcg_cost_ = pcg_cost;
-    st.report.linear_solve_ms += lin.time_ms;
-    st.report.linear_iterations_total += lin.iterations;
     if (prefer_direct_) {
       linear.kind = LinearSolverKind::direct_ldlt;
       pcg = false;
-    } else {
-      if (prefer_two_level_) linear.kind = LinearSolverKind::pcg_two_level;
+    } else if (prefer_two_level_) {
+      linear.kind = LinearSolverKind::pcg_two_level;
+    }
+  };
+  if (weigh && options_.ill_conditioned) {
+    choose(std::numeric_limits<double>::infinity());
+    weigh = false;
+  }
+  if (weigh) linear.max_iterations = kMinIterationsForDirect;
+  linear_.set_options(linear);
+  LinearSolveReport lin = linear_.solve(matrix_, st.r, st.dx);
+  if (weigh && !lin.converged && !lin.indefinite && lin.iterations == kMinIterationsForDirect) {
+    // The iterations PCG still needs, from the rate of its first ones (relative residual = rate^k),
+    // at most its iteration limit. A residual that did not drop at all (CG's residual is not
+    // monotone) counts as the whole limit.
+    const double reached = std::clamp(lin.relative_residual, 1e-300, 0.999);
+    const double remaining = std::min(
+        static_cast<double>(max_pcg - kMinIterationsForDirect),
+        kMinIterationsForDirect * std::max(1.0, std::log(linear.relative_tolerance) / std::log(reached) - 1.0));
+    const double values = static_cast<double>(matrix_.num_values());
+    const double unknowns = static_cast<double>(matrix_.size());
+    choose(remaining * (4.0 * values + 10.0 * unknowns));
+    st.report.linear_solve_ms += lin.time_ms;
+    st.report.linear_iterations_total += lin.iterations;
+    if (pcg) {
       linear.max_iterations = max_pcg - lin.iterations;
       linear.warm_start = true;
     }
