@@ -6,7 +6,7 @@
 // with --refine-like x10 meshes for the vase and the block (arg refine = 10). Each iteration runs
 // the whole drop (1 s of simulated time); counters give per-step median and worst, the rigid part
 // (broad + narrow phase + solver) and the impact part (analyses and replacements) of the worst step,
-// and steps per second.
+// the median over the drops of each drop's worst step, and steps per second.
 //   impact_40k: one impact analysis (solve and fracture) of a 40k-tet glass bar.
 #include <benchmark/benchmark.h>
 
@@ -69,6 +69,7 @@ void BM_Drop(benchmark::State& state) {
   auto clay = std::make_shared<ImpactSettings>();
   clay->fracture.plasticity.max_plastic_strain = 1.0;
   std::vector<double> step_ms;
+  std::vector<double> drop_worst;  // each drop's worst step
   double worst_rigid = 0, worst_impact = 0;
   for (auto _ : state) {
     state.PauseTiming();
@@ -88,10 +89,12 @@ void BM_Drop(benchmark::State& state) {
       (void)w.add_body(model, {.rigid = upper});
     }
     state.ResumeTiming();
+    drop_worst.push_back(0);
     for (int i = 0; i < 60; ++i) {
       const auto t0 = std::chrono::steady_clock::now();
       w.step();
       const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      drop_worst.back() = std::max(drop_worst.back(), ms);
       step_ms.push_back(ms);
       const StepStats& s = w.stats();
       if (ms >= *std::max_element(step_ms.begin(), step_ms.end())) {
@@ -103,6 +106,10 @@ void BM_Drop(benchmark::State& state) {
   std::sort(step_ms.begin(), step_ms.end());
   state.counters["median_ms"] = step_ms[step_ms.size() / 2];
   state.counters["worst_ms"] = step_ms.back();
+  // The worst step of a typical drop: the median over the drops (the first drop in the process
+  // also pays for memory and code touched for the first time).
+  std::sort(drop_worst.begin(), drop_worst.end());
+  state.counters["drop_worst_ms"] = drop_worst[drop_worst.size() / 2];
   state.counters["worst_rigid_ms"] = worst_rigid;
   state.counters["worst_impact_ms"] = worst_impact;
   double total = 0;
@@ -115,6 +122,10 @@ BENCHMARK(BM_Drop)
     ->Args({0, 1})
     ->Args({1, 1})
     ->Args({2, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(9);
+BENCHMARK(BM_Drop)
+    ->ArgNames({"scene", "refine"})
     ->Args({0, 10})
     ->Args({2, 10})
     ->Unit(benchmark::kMillisecond)
