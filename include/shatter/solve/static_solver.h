@@ -125,6 +125,12 @@ struct StaticSolverOptions {
   /// direct_when_cheaper chooses between the factorization and the two-level PCG at the first Newton
   /// step without first running kMinIterationsForDirect Gauss-Seidel PCG iterations to find out.
   bool ill_conditioned = false;
+  /// Near the solution (relative residual below this), a Newton step reuses the last tangent it
+  /// assembled, and with the direct solver its factorization, instead of assembling a new one (a
+  /// chord step), for as long as each such step cuts the residual at least tenfold. Each step is
+  /// cheaper, the convergence linear instead of quadratic: for solves that need one or two steps
+  /// near the solution (impacts: 1e-2). 0: always assemble.
+  double chord_tolerance = 0;
   /// PCG: the first Newton step of a load step starts from the previous first step d, scaled by
   /// (r.d)/(d.K d) (the energy-norm optimal multiple: never a worse start than zero). Repeated
   /// impacts at one place with other magnitudes then need few iterations.
@@ -179,6 +185,7 @@ struct StaticReport {
   int line_search_cuts = 0;         ///< step halvings by the line search
   int projected_iterations = 0;     ///< Newton iterations that used the projected stiffness
   int direct_iterations = 0;        ///< Newton iterations solved with the direct solver
+  int chord_iterations = 0;         ///< Newton iterations with the last tangent (chord_tolerance)
   int load_step_failures = 0;       ///< load steps retried at half the size
   /// Every Newton iteration, then one last entry with the final residual (step_length 0), when
   /// StaticSolverOptions::record_history.

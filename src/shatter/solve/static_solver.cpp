@@ -177,6 +177,9 @@ struct StaticSolver::SolveState {
   std::vector<Vec3> x_trial;                                 ///< line-search trial positions, m (#nodes)
   double step_length = 0;          ///< the last line search's accepted fraction of the step (0: none)
   bool last_direct = false;        ///< the last linear solve was the direct one
+  bool have_tangent = false;       ///< the matrix holds a tangent assembled in this solve
+  bool tangent_projected = false;  ///< ... the projected one
+  double chord_from = -1;          ///< relative residual the last chord step started from (-1: it assembled)
   bool out_of_iterations = false;  ///< StaticSolverOptions::max_total_newton_iterations ran out
   StaticReport report;
 };
@@ -466,10 +469,21 @@ void StaticSolver::record_final(SolveState& st) const {
 
 StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iteration, double relative_residual,
                                                      bool projected, bool& indefinite) {
-  {
+  // A chord step near the solution: the last tangent again, while each such step cuts the
+  // residual tenfold (StaticSolverOptions::chord_tolerance).
+  const bool chord = options_.chord_tolerance > 0 && st.have_tangent && st.tangent_projected == projected &&
+                     relative_residual < options_.chord_tolerance &&
+                     (st.chord_from < 0 || relative_residual < 0.1 * st.chord_from);
+  if (chord) {
+    st.chord_from = relative_residual;
+    ++st.report.chord_iterations;
+  } else {
     const auto t = Clock::now();
     assemble_stiffness(st.model, st.x, AssemblyOptions{.project_psd = projected}, matrix_);
     st.report.assembly_ms += ms_since(t);
+    st.have_tangent = true;
+    st.tangent_projected = projected;
+    st.chord_from = -1;
   }
   // Inexact Newton: the linear residual need only be a tenth of what the Newton tolerance
   // allows, ||K dx - r|| <= 0.1 tol reference (never tighter than the linear option).
