@@ -520,15 +520,16 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
   //    kTwoLevelIterations iterations of twice a Gauss-Seidel iteration's work.
   const int max_pcg = linear.max_iterations;
   bool weigh = pcg && options_.direct_when_cheaper && !direct_checked_ && max_pcg > kMinIterationsForDirect;
-  // Choose the factorization, the two-level PCG or more of the same PCG (pcg_cost; +inf: not
-  // measured) by their costs, for this solve and the rest on this pattern.
-  const auto choose = [&](double pcg_cost) {
+  // Choose the factorization, the two-level PCG or `pcg_iterations` more of the same PCG (+inf:
+  // not measured) by their costs, for this solve and the rest on this pattern.
+  const auto choose = [&](double pcg_iterations) {
     direct_checked_ = true;
     const auto t = Clock::now();
     const DirectCost direct = linear_.direct_cost(matrix_);
     st.report.linear_solve_ms += ms_since(t);
     const double values = static_cast<double>(matrix_.num_values());
     const double unknowns = static_cast<double>(matrix_.size());
+    const double pcg_cost = pcg_iterations * (4.0 * values + 10.0 * unknowns);
     const double direct_cost = 2.0 * direct.factor_flops + 4.0 * direct.factor_nonzeros;
     const double aggregates =
         std::clamp(std::floor(static_cast<double>(matrix_.num_active()) / std::max(1, linear.min_aggregate_nodes)), 1.0,
@@ -561,12 +562,9 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
     // at most its iteration limit. A residual that did not drop at all (CG's residual is not
     // monotone) counts as the whole limit.
     const double reached = std::clamp(lin.relative_residual, 1e-300, 0.999);
-    const double remaining = std::min(
+    choose(std::min(
         static_cast<double>(max_pcg - kMinIterationsForDirect),
-        kMinIterationsForDirect * std::max(1.0, std::log(linear.relative_tolerance) / std::log(reached) - 1.0));
-    const double values = static_cast<double>(matrix_.num_values());
-    const double unknowns = static_cast<double>(matrix_.size());
-    choose(remaining * (4.0 * values + 10.0 * unknowns));
+        kMinIterationsForDirect * std::max(1.0, std::log(linear.relative_tolerance) / std::log(reached) - 1.0)));
     st.report.linear_solve_ms += lin.time_ms;
     st.report.linear_iterations_total += lin.iterations;
     if (pcg) {
