@@ -1122,22 +1122,21 @@ void World::process_impacts() {
       /*min_parallel=*/2);
   // The children's collision shapes (their convex hulls) side by side too: each reads only its
   // parent's shape and its own model.
-  std::vector<std::array<std::size_t, 2>> children;  // (analysis, child)
+  std::vector<std::array<std::size_t, 2>> children;  // (analysis, child), in that order
   for (std::size_t k = 0; k < analyse.size(); ++k)
     if (*results[k] && (*results[k])->analysed)
       for (std::size_t c = 0; c < (*results[k])->children.size(); ++c) children.push_back({k, c});
-  std::vector<std::vector<Result<std::shared_ptr<const Shape>>>> shapes(analyse.size());
-  for (std::size_t k = 0; k < analyse.size(); ++k)
-    if (*results[k] && (*results[k])->analysed)
-      shapes[k].resize((*results[k])->children.size(), make_error("not built"));
+  std::vector<std::optional<Result<std::shared_ptr<const Shape>>>> built(children.size());
   parallel_for(
       0, static_cast<std::int64_t>(children.size()),
       [&](std::int64_t i) {
         const auto [k, c] = children[static_cast<std::size_t>(i)];
         const ImpactResult& r = **results[k];
-        shapes[k][c] = child_shape(analyse[k].first, r, r.children[c]);
+        built[static_cast<std::size_t>(i)] = child_shape(analyse[k].first, r, r.children[c]);
       },
       /*min_parallel=*/2);
+  std::vector<std::vector<Result<std::shared_ptr<const Shape>>>> shapes(analyse.size());
+  for (std::size_t i = 0; i < children.size(); ++i) shapes[children[i][0]].push_back(std::move(*built[i]));
   for (std::size_t k = 0; k < analyse.size(); ++k) {
     const auto [id, other_id] = analyse[k];
     Result<ImpactResult>& result = *results[k];
