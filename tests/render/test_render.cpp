@@ -381,9 +381,11 @@ test::CommandResult view_with_script(const test::TempDir& dir, const std::string
     std::ofstream out(path);
     out << script;
   }
-  return test::run_command("xvfb-run -a -s '-screen 0 1024x768x24' " + test::cli_path() + " view " +
-                               std::string(SHATTER_SOURCE_DIR) + "/scenes/vase_drop.json " + options + " --script " +
-                               path,
+  // The X authority file lives in the test's folder: xvfb-run's own temporary folder is removed
+  // on exit, and a failure to remove it (seen on busy machines) would replace the exit status.
+  return test::run_command("xvfb-run -a -f " + dir.file("Xauthority") + " -s '-screen 0 1024x768x24' " +
+                               test::cli_path() + " view " + std::string(SHATTER_SOURCE_DIR) +
+                               "/scenes/vase_drop.json " + options + " --script " + path,
                            true);
 }
 
