@@ -10,6 +10,7 @@
 #include "shatter/fem/fem_model.h"
 #include "shatter/fem/material.h"
 #include "shatter/fracture/fracture.h"
+#include "shatter/fracture/stress.h"
 #include "shatter/mesh/generate.h"
 #include "shatter/mesh/topology.h"
 
@@ -70,6 +71,26 @@ BENCHMARK(BM_FractureGivenStress)
     ->Args({40000, 1, 1})
     ->Args({40000, 4, 1})
     ->Unit(benchmark::kMillisecond);
+
+// The stresses of every tet (Cauchy stress, principal stresses and directions, von Mises), as every
+// impact analysis computes them before it looks for cracks: the bar twisted and bent, so that each
+// tet's stress has all six components.
+void BM_ComputeStresses(benchmark::State& state) {
+  const Setup& s = setup(state.range(0));
+  std::vector<Vec3> deformed = s.mesh.positions;
+  for (Vec3& p : deformed) {
+    const double angle = 0.01 * p.x();
+    const double y = p.y() - 0.125, z = p.z() - 0.125;
+    p = Vec3(p.x() + 0.002 * y, 0.125 + std::cos(angle) * y - std::sin(angle) * z + 0.003 * p.x() * p.x(),
+             0.125 + std::sin(angle) * y + std::cos(angle) * z);
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(compute_stresses(s.model, deformed).data());
+  state.counters["tets"] = static_cast<double>(s.mesh.num_tets());
+  state.counters["ns_per_tet"] =
+      benchmark::Counter(static_cast<double>(s.mesh.num_tets()),
+                         benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_ComputeStresses)->Arg(4000)->Arg(40000)->Unit(benchmark::kMillisecond);
 
 void BM_PlanCracks(benchmark::State& state) {
   const Setup& s = setup(state.range(0));

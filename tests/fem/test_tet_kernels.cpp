@@ -6,9 +6,15 @@
 #include <algorithm>
 #include <functional>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <vector>
 
 #include "fem_test_util.h"
+#include "shatter/core/simd.h"
 #include "shatter/fem/tet_kernels.h"
 #include "shatter/mesh/tet_mesh.h"
 #include "support/test_support.h"
@@ -222,6 +228,55 @@ TEST(TetKernels, PrincipalStressesRandomAndDeterministic) {
     EXPECT_EQ(p.values, again.values);
     EXPECT_EQ(p.vectors, again.vectors);
   }
+}
+
+TEST(TetKernels, PrincipalStressesFourAtATimeGiveTheBitsOfOneAtATime) {
+  // Random tensors, rotated repeated pairs, diagonal ones, zero, a NaN and a huge one, in every
+  // position of a group of four and in groups cut short; both instruction sets.
+  Random rng(11);
+  std::vector<Mat3> tensors;
+  for (int trial = 0; trial < 60; ++trial) {
+    const Mat3 Q = test::random_rotation(rng);
+    Vec3 d = rng.uniform_vec3(-1e8, 1e8);
+    if (trial % 4 == 1) d[2] = d[0];
+    Mat3 A = Q * d.asDiagonal() * Q.transpose();
+    if (trial % 4 == 2) A = d.asDiagonal();
+    if (trial % 4 == 3 && trial % 8 == 3) A(0, 1) = 1e-300;  // one entry all but zero
+    tensors.emplace_back(A);
+  }
+  tensors.emplace_back(Mat3::Zero());
+  tensors.emplace_back(Mat3::Constant(std::numeric_limits<double>::quiet_NaN()));
+  tensors.emplace_back(1e200 * Mat3::Identity() + 1e40 * Mat3::Ones());
+  // Bit for bit: NaN equals NaN, and -0 differs from +0.
+  const auto same_bits = [](const Principal& a, const Principal& b) {
+    for (int i = 0; i < 3; ++i) {
+      if (std::bit_cast<std::uint64_t>(a.values[i]) != std::bit_cast<std::uint64_t>(b.values[i])) return false;
+      for (int j = 0; j < 3; ++j)
+        if (std::bit_cast<std::uint64_t>(a.vectors(i, j)) != std::bit_cast<std::uint64_t>(b.vectors(i, j)))
+          return false;
+    }
+    return true;
+  };
+  const SimdIsa saved = simd_isa();
+  for (const SimdIsa isa : {SimdIsa::baseline, SimdIsa::avx2}) {
+    set_simd_isa(isa);
+    for (std::size_t count : {std::size_t{0}, std::size_t{1}, std::size_t{3}, std::size_t{6}, tensors.size()}) {
+      std::vector<Principal> batch(count);
+      principal_stresses(std::span<const Mat3>(tensors.data(), count), std::span(batch));
+      for (std::size_t i = 0; i < count; ++i) {
+        EXPECT_TRUE(same_bits(principal_stresses(tensors[i]), batch[i])) << i;
+      }
+    }
+  }
+  set_simd_isa(saved);
+  // And the same bits from either instruction set.
+  set_simd_isa(SimdIsa::baseline);
+  std::vector<Principal> baseline(tensors.size()), avx2(tensors.size());
+  principal_stresses(std::span<const Mat3>(tensors), std::span(baseline));
+  set_simd_isa(SimdIsa::avx2);
+  principal_stresses(std::span<const Mat3>(tensors), std::span(avx2));
+  set_simd_isa(saved);
+  for (std::size_t i = 0; i < tensors.size(); ++i) EXPECT_TRUE(same_bits(baseline[i], avx2[i])) << i;
 }
 
 TEST(TetKernels, VonMises) {

@@ -2,6 +2,8 @@
 // deformed corners; stress analysis helpers (Cauchy stress, principal stresses, von Mises).
 #pragma once
 
+#include <span>
+
 #include "shatter/core/types.h"
 #include "shatter/fem/constitutive.h"
 
@@ -58,6 +60,9 @@ struct Principal {
 /// largest-magnitude component of columns 0 and 1 is positive (first such index on ties); column 2
 /// = column 0 x column 1. Only the upper triangle of `symmetric` is read.
 Principal principal_stresses(const Mat3& m);
+/// The same for many tensors (out.size() == m.size()), four at a time: the same bits as one by one,
+/// about three times the throughput (the rotations' divisions and square roots overlap).
+void principal_stresses(std::span<const Mat3> m, std::span<Principal> out);
 /// von Mises equivalent stress, Pa: sqrt(3/2 s:s) with s the deviatoric part of sigma.
 double von_mises(const Mat3& sigma);
 

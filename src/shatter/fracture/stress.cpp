@@ -1,7 +1,10 @@
 // Per-tet stress analysis (see stress.h).
 #include "shatter/fracture/stress.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <span>
 
 #include "shatter/core/assert.h"
 #include "shatter/core/parallel.h"
@@ -9,10 +12,12 @@
 
 namespace shatter {
 
-TetStress analyze_stress(const Mat3& sigma) {
+namespace {
+
+// The rest of TetStress from sigma and its principal stresses.
+TetStress finish_stress(const Mat3& sigma, const Principal& p) {
   TetStress s;
   s.sigma = sigma;
-  const Principal p = principal_stresses(sigma);
   s.principal = p.values;
   s.directions = p.vectors;
   // Largest tension is values[0] (if > 0), largest compression values[2] (if < 0).
@@ -23,25 +28,53 @@ TetStress analyze_stress(const Mat3& sigma) {
   return s;
 }
 
+// Analyses sigma[first, last) into out[first, last), principal stresses four at a time.
+void analyze_range(std::span<const Mat3> sigma, std::span<TetStress> out) {
+  std::array<Principal, 4> p;
+  for (std::size_t i = 0; i < sigma.size(); i += 4) {
+    const std::size_t n = std::min<std::size_t>(4, sigma.size() - i);
+    principal_stresses(sigma.subspan(i, n), std::span(p.data(), n));
+    for (std::size_t k = 0; k < n; ++k) out[i + k] = finish_stress(sigma[i + k], p[k]);
+  }
+}
+
+}  // namespace
+
+TetStress analyze_stress(const Mat3& sigma) { return finish_stress(sigma, principal_stresses(sigma)); }
+
 std::vector<TetStress> compute_stresses(const FemModel& model, const std::vector<Vec3>& deformed) {
   SHATTER_CHECK(static_cast<Index>(deformed.size()) == model.num_nodes);
   std::vector<TetStress> out(model.tets.size());
+  constexpr std::int64_t kGroup = 64;  // tets per task: their stresses, then their analyses
   parallel_for(
-      0, model.num_tets(),
-      [&](std::int64_t e) {
-        const auto t = static_cast<std::size_t>(e);
-        Mat34 x;
-        for (int k = 0; k < 4; ++k) x.col(k) = deformed[static_cast<std::size_t>(model.tets[t][k])];
-        out[t] = analyze_stress(cauchy_stress(model.model, model.lame, deformation_gradient(model.rest[t], x)));
+      0, (model.num_tets() + kGroup - 1) / kGroup,
+      [&](std::int64_t g) {
+        const auto first = static_cast<std::size_t>(g * kGroup);
+        const std::size_t n = std::min<std::size_t>(kGroup, model.tets.size() - first);
+        std::array<Mat3, kGroup> sigma;
+        for (std::size_t k = 0; k < n; ++k) {
+          const std::size_t t = first + k;
+          Mat34 x;
+          for (int c = 0; c < 4; ++c) x.col(c) = deformed[static_cast<std::size_t>(model.tets[t][c])];
+          sigma[k] = cauchy_stress(model.model, model.lame, deformation_gradient(model.rest[t], x));
+        }
+        analyze_range(std::span(sigma.data(), n), std::span(out).subspan(first, n));
       },
-      512);
+      8);
   return out;
 }
 
 std::vector<TetStress> analyze_stresses(const std::vector<Mat3>& sigma) {
   std::vector<TetStress> out(sigma.size());
+  constexpr std::int64_t kGroup = 64;
   parallel_for(
-      0, static_cast<std::int64_t>(sigma.size()), [&](std::int64_t e) { out[e] = analyze_stress(sigma[e]); }, 1024);
+      0, (static_cast<std::int64_t>(sigma.size()) + kGroup - 1) / kGroup,
+      [&](std::int64_t g) {
+        const auto first = static_cast<std::size_t>(g * kGroup);
+        const std::size_t n = std::min<std::size_t>(kGroup, sigma.size() - first);
+        analyze_range(std::span(sigma).subspan(first, n), std::span(out).subspan(first, n));
+      },
+      16);
   return out;
 }
 
