@@ -181,6 +181,7 @@ struct StaticSolver::SolveState {
   bool tangent_projected = false;  ///< ... the projected one
   double chord_from = -1;          ///< relative residual the last chord step started from (-1: it assembled)
   bool out_of_iterations = false;  ///< StaticSolverOptions::max_total_newton_iterations ran out
+  double step_tolerance = 0;       ///< relative residual the current load step must reach
   StaticReport report;
 };
 
@@ -367,6 +368,7 @@ double StaticSolver::residual(SolveState& st, double s) {
 
 StaticSolver::Outcome StaticSolver::newton_load_step(SolveState& st, double s, double tolerance, int& iterations) {
   st.set_anchors(s);
+  st.step_tolerance = tolerance;
   st.energy = std::numeric_limits<double>::quiet_NaN();
   double previous_rel = std::numeric_limits<double>::infinity();
   const bool linear_model = st.model.model == ModelKind::linear;
@@ -485,17 +487,17 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
     st.tangent_projected = projected;
     st.chord_from = -1;
   }
-  // Inexact Newton: the linear residual need only be a tenth of what the Newton tolerance
-  // allows, ||K dx - r|| <= 0.1 tol reference (never tighter than the linear option).
+  // Inexact Newton: the linear residual need only be a tenth of what the load step's tolerance
+  // allows, ||K dx - r|| <= 0.1 tol reference (never tighter than the linear option): an
+  // intermediate load step (StaticSolverOptions::intermediate_tolerance) needs less than the last.
   LinearSolverOptions linear = options_.linear;
   // Once chosen, the direct solver keeps its factorization while CG preconditioned by it converges
   // quickly (LinearSolverOptions::reuse_factorization).
   if (prefer_direct_) linear.kind = LinearSolverKind::direct_ldlt;
   if (prefer_two_level_) linear.kind = LinearSolverKind::pcg_two_level;
   linear.reuse_factorization = prefer_direct_;
-  linear.relative_tolerance =
-      std::max(linear.relative_tolerance,
-               std::min(0.5, 0.1 * options_.relative_residual_tolerance / std::max(relative_residual, 1e-300)));
+  const double forcing = 0.1 * st.step_tolerance / std::max(relative_residual, 1e-300);
+  linear.relative_tolerance = std::max(linear.relative_tolerance, std::min(0.5, forcing));
   bool pcg = linear.kind != LinearSolverKind::direct_ldlt;
   linear.warm_start = false;
   if (pcg && iteration == 0 && options_.warm_start && first_step_.size() == st.r.size()) {
