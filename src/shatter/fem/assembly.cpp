@@ -179,17 +179,38 @@ Mat3 BlockSparseMatrix::block(Index a, Index k) const {
 void BlockSparseMatrix::multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const {
   SHATTER_ASSERT(x.size() == size());
   y.resize(size());
-  const int* outer = matrix_.outerIndexPtr();
-  const int* inner = matrix_.innerIndexPtr();
   const double* v = values();
+  // Block row by block row: each block's three x entries are read once for its three rows, and the
+  // rows' sums are three independent chains of additions (one chain per row leaves the CPU waiting
+  // on each addition). Each row still adds its products in column order, as a scalar CSR product.
   parallel_for(
-      0, size(),
-      [&](std::int64_t r) {
-        double s = 0;
-        for (int p = outer[r]; p < outer[r + 1]; ++p) s += v[p] * x[inner[p]];
-        y[r] = s;
+      0, num_active(),
+      [&](std::int64_t a) {
+        const Index k0 = block_ptr_[a], k1 = block_ptr_[a + 1];
+        const Index stride = 3 * (k1 - k0);
+        const double* r0 = v + 9 * k0;
+        const double* r1 = r0 + stride;
+        const double* r2 = r1 + stride;
+        double s0 = 0, s1 = 0, s2 = 0;
+        for (Index k = k0; k < k1; ++k) {
+          const Index c = 3 * block_col_[k];
+          const Index o = 3 * (k - k0);
+          const double x0 = x[c], x1 = x[c + 1], x2 = x[c + 2];
+          s0 += r0[o] * x0;
+          s1 += r1[o] * x0;
+          s2 += r2[o] * x0;
+          s0 += r0[o + 1] * x1;
+          s1 += r1[o + 1] * x1;
+          s2 += r2[o + 1] * x1;
+          s0 += r0[o + 2] * x2;
+          s1 += r1[o + 2] * x2;
+          s2 += r2[o + 2] * x2;
+        }
+        y[3 * a] = s0;
+        y[3 * a + 1] = s1;
+        y[3 * a + 2] = s2;
       },
-      16384);  // ~0.05 us per row, once per PCG iteration: parallel only for large systems
+      4096);  // ~0.15 us per block row, once per PCG iteration: parallel only for large systems
 }
 
 void BlockSparseMatrix::add_element(Index slot, const Mat12& k) {

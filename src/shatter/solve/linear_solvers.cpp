@@ -188,24 +188,26 @@ bool LinearSolver::invert_diagonal_blocks(const BlockSparseMatrix& a, std::strin
 
 namespace {
 
-// Sum over the blocks k in [k_begin, k_end) of block row i of A: A_ik z_col(k).
+// Sum over the blocks k in [k_begin, k_end) of block row i of A: A_ik z_col(k). The three rows
+// in one pass (three independent chains of additions), each summed in block order.
 Vec3 row_product(const BlockSparseMatrix& a, const Eigen::VectorXd& z, Index i, Index k_begin, Index k_end) {
   const std::vector<Index>& ptr = a.block_ptr();
   const std::vector<Index>& col = a.block_col();
   const Index p0 = ptr[i];
   const Index stride = 3 * (ptr[i + 1] - p0);
-  Vec3 s;
-  for (int row = 0; row < 3; ++row) {
-    const double* vr = a.values() + 9 * p0 + row * stride;
-    double acc = 0;
-    for (Index k = k_begin; k < k_end; ++k) {
-      const double* blk = vr + 3 * (k - p0);
-      const Index c = 3 * col[k];
-      acc += blk[0] * z[c] + blk[1] * z[c + 1] + blk[2] * z[c + 2];
-    }
-    s[row] = acc;
+  const double* v0 = a.values() + 9 * p0;
+  const double* v1 = v0 + stride;
+  const double* v2 = v1 + stride;
+  double acc0 = 0, acc1 = 0, acc2 = 0;
+  for (Index k = k_begin; k < k_end; ++k) {
+    const Index o = 3 * (k - p0);
+    const Index c = 3 * col[k];
+    const double z0 = z[c], z1 = z[c + 1], z2 = z[c + 2];
+    acc0 += v0[o] * z0 + v0[o + 1] * z1 + v0[o + 2] * z2;
+    acc1 += v1[o] * z0 + v1[o + 1] * z1 + v1[o + 2] * z2;
+    acc2 += v2[o] * z0 + v2[o + 1] * z1 + v2[o + 2] * z2;
   }
-  return s;
+  return {acc0, acc1, acc2};
 }
 
 // [d]x: the matrix of the cross product d x (.).
