@@ -153,15 +153,33 @@ Mat12 tet_stiffness(ModelKind kind, const Lame& lame, const TetRest& rest, const
   return tet_stiffness_from_differential(kind, lame, rest, x);
 }
 
+namespace {
+// Whether the symmetric S is positive semi-definite by Sylvester's criterion on all its principal
+// minors: a zero S (a body at rest) and any clearly semi-definite one pass without the eigenvalue
+// decomposition; a borderline one may fail it and is decomposed.
+bool clearly_psd(const Mat3& S) {
+  const double a = S(0, 0), b = S(1, 1), c = S(2, 2), d = S(0, 1), e = S(0, 2), f = S(1, 2);
+  if (a < 0 || b < 0 || c < 0) return false;
+  if (a * b - d * d < 0 || a * c - e * e < 0 || b * c - f * f < 0) return false;
+  return a * (b * c - f * f) - d * (d * c - f * e) + e * (d * f - b * e) >= 0;
+}
+}  // namespace
+
 // Flattened (see deformation_gradient).
 [[gnu::flatten]] Mat12 stvk_projected_stiffness(const Lame& lame, const TetRest& rest, const Mat34& x) {
   Mat3 F, S;  // once for both terms
   stvk_deformation(lame, rest, x, F, S);
   const Mat43 B = shape_gradients(rest);
   Mat12 k = stiffness_closed_form(lame, rest.volume, B, F, S);
+  // The negative part of S, found only when there may be one (a third to a half of an impact's tets
+  // are clearly semi-definite; the decomposition costs about as much as the closed form).
   Eigen::SelfAdjointEigenSolver<Mat3> eig;
-  eig.computeDirect(S);
-  if (eig.eigenvalues()[0] < 0.0) {
+  bool has_negative = false;
+  if (!clearly_psd(S)) {
+    eig.computeDirect(S);
+    has_negative = eig.eigenvalues()[0] < 0.0;
+  }
+  if (has_negative) {
     Mat3 negative = Mat3::Zero();
     for (int q = 0; q < 3; ++q)
       if (eig.eigenvalues()[q] < 0.0)
@@ -203,14 +221,6 @@ namespace {
 typedef double JacobiLanes __attribute__((vector_size(4 * sizeof(double))));
 typedef long long JacobiMask __attribute__((vector_size(4 * sizeof(long long))));
 
-// Cyclic Jacobi (Golub & Van Loan, Alg. 8.5.2) on the six entries of four symmetric matrices at
-// once: zero each off-diagonal entry in turn until they are negligible against the diagonal. A
-// diagonal input takes no rotation at all. The rotation of plane (p, q) changes a_pp, a_qq, a_pq
-// and the two entries a_rp, a_rq of the third index r only, written out on those in Rutishauser's
-// tau form (less round-off than the full products). A rotation is a chain of divisions and square
-// roots; four matrices side by side share the divisions' vector instructions and overlap their
-// latencies. Lanes that are done (or whose entry is already zero) keep their values, so each lane
-// gets the bits it would get alone. Reads the upper triangles of in[0..n); writes out[0..n).
 // Correctly rounded square roots, as std::sqrt: the same bits on every path. The AVX2 one is not
 // always_inline (GCC inlines it only into AVX2 code: the flattened jacobi_lanes_avx2) and returns
 // through a pointer (a 32-byte vector returned by value from AVX code to baseline code would change
@@ -234,6 +244,14 @@ template <bool kAvx2>
   return out;
 }
 
+// Cyclic Jacobi (Golub & Van Loan, Alg. 8.5.2) on the six entries of four symmetric matrices at
+// once: zero each off-diagonal entry in turn until they are negligible against the diagonal. A
+// diagonal input takes no rotation at all. The rotation of plane (p, q) changes a_pp, a_qq, a_pq
+// and the two entries a_rp, a_rq of the third index r only, written out on those in Rutishauser's
+// tau form (less round-off than the full products). A rotation is a chain of divisions and square
+// roots; four matrices side by side share the divisions' vector instructions and overlap their
+// latencies. Lanes that are done (or whose entry is already zero) keep their values, so each lane
+// gets the bits it would get alone. Reads the upper triangles of in[0..n); writes out[0..n).
 template <bool kAvx2>
 [[gnu::always_inline]] inline void jacobi_lanes(const Mat3* const* in, Principal* const* out, int n) {
   JacobiLanes d[3], o[3], v[3][3];  // diagonal; off-diagonal (0,1), (0,2), (1,2); v[row][column]
