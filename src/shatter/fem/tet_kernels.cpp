@@ -156,7 +156,9 @@ Mat12 tet_stiffness(ModelKind kind, const Lame& lame, const TetRest& rest, const
 namespace {
 // Whether the symmetric S is positive semi-definite by Sylvester's criterion on all its principal
 // minors: a zero S (a body at rest) and any clearly semi-definite one pass without the eigenvalue
-// decomposition; a borderline one may fail it and is decomposed.
+// decomposition; a borderline one may fail it and is decomposed. A singular S that passes (uniaxial
+// stress, diag(s, 0, 0)) can get a negative eigenvalue of round-off size from the decomposition;
+// skipping it leaves that artefact unprojected.
 bool clearly_psd(const Mat3& S) {
   const double a = S(0, 0), b = S(1, 1), c = S(2, 2), d = S(0, 1), e = S(0, 2), f = S(1, 2);
   if (a < 0 || b < 0 || c < 0) return false;
@@ -172,7 +174,8 @@ bool clearly_psd(const Mat3& S) {
   const Mat43 B = shape_gradients(rest);
   Mat12 k = stiffness_closed_form(lame, rest.volume, B, F, S);
   // The negative part of S, found only when there may be one (a third to a half of an impact's tets
-  // are clearly semi-definite; the decomposition costs about as much as the closed form).
+  // are clearly semi-definite; the decomposition costs about as much as the closed form). The
+  // reference scenes keep their bits; a singular S may differ from before by round-off (above).
   Eigen::SelfAdjointEigenSolver<Mat3> eig;
   bool has_negative = false;
   if (!clearly_psd(S)) {

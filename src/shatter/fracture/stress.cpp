@@ -28,7 +28,7 @@ TetStress finish_stress(const Mat3& sigma, const Principal& p) {
   return s;
 }
 
-// Analyses sigma[first, last) into out[first, last), principal stresses four at a time.
+// Analyses each tensor of sigma into the same place of out, principal stresses four at a time.
 void analyze_range(std::span<const Mat3> sigma, std::span<TetStress> out) {
   std::array<Principal, 4> p;
   for (std::size_t i = 0; i < sigma.size(); i += 4) {
