@@ -173,9 +173,10 @@ bool clearly_psd(const Mat3& S) {
   stvk_deformation(lame, rest, x, F, S);
   const Mat43 B = shape_gradients(rest);
   Mat12 k = stiffness_closed_form(lame, rest.volume, B, F, S);
-  // The negative part of S, found only when there may be one (a third to a half of an impact's tets
-  // are clearly semi-definite; the decomposition costs about as much as the closed form). The
-  // reference scenes keep their bits; a singular S may differ from before by round-off (above).
+  // The negative part of S, found only when there may be one. Clearly semi-definite, counted over
+  // the refills of one drop: 45 % of the cinder blocks' tets (their first refill is at rest), 17 %
+  // of the clay teddy's. The decomposition costs about as much as the closed form (150 against
+  // 177 ns). The reference scenes keep their bits; a singular S may differ by round-off (above).
   Eigen::SelfAdjointEigenSolver<Mat3> eig;
   bool has_negative = false;
   if (!clearly_psd(S)) {
