@@ -139,6 +139,7 @@ class Viewer {
   void focus_selection();
   // Frame.
   void ui();
+  void cover_window();
   void run_script();
   /// The window pixel of a live scene body's centre of mass (scripts); logs and gives nothing when
   /// no live body has the name.
@@ -531,11 +532,23 @@ void Viewer::handle_mouse() {
   }
 }
 
+// The panels are opaque: the renderer leaves the pixels under them unshaded.
+void Viewer::cover_window() {
+  const ImVec2 pos = ImGui::GetWindowPos(), size = ImGui::GetWindowSize();
+  const ImVec2 scale = ImGui::GetIO().DisplayFramebufferScale;
+  render_options_.covered.push_back({.x = static_cast<int>(std::ceil(pos.x * scale.x)),
+                                     .y = static_cast<int>(std::ceil(pos.y * scale.y)),
+                                     .width = static_cast<int>(std::floor(size.x * scale.x)) - 1,
+                                     .height = static_cast<int>(std::floor(size.y * scale.y)) - 1});
+}
+
 void Viewer::ui() {
   World& w = *built_->world;
+  render_options_.covered.clear();
   ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
   ImGui::SetNextWindowSize(ImVec2(400, 0), ImGuiCond_FirstUseEver);
   ImGui::Begin("shatter");
+  cover_window();
   // Scene.
   if (!scene_files_.empty()) {
     const std::string current =
@@ -700,6 +713,7 @@ void Viewer::ui() {
                           ImGuiCond_FirstUseEver);
   ImGui::SetNextWindowSize(ImVec2(420, 130), ImGuiCond_FirstUseEver);
   ImGui::Begin("events");
+  cover_window();
   for (const std::string& line : log_) ImGui::TextUnformatted(line.c_str());
   if (ImGui::GetScrollY() >= ImGui::GetScrollMaxY()) ImGui::SetScrollHereY(1.0F);
   ImGui::End();
@@ -844,6 +858,9 @@ int Viewer::run() {
   ImGui::CreateContext();
   ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini left in the user's folder
   ImGui::StyleColorsDark();
+  // Opaque panels (the scene is not drawn under them, Viewer::cover_window).
+  ImGui::GetStyle().Colors[ImGuiCol_WindowBg].w = 1.0F;
+  ImGui::GetStyle().Colors[ImGuiCol_TitleBgCollapsed].w = 1.0F;
   ImGui_ImplGlfw_InitForOpenGL(window_, true);
   ImGui_ImplOpenGL3_Init("#version 330 core");
 

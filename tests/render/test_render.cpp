@@ -216,6 +216,89 @@ TEST(Render, TheVaseIsWhereTheWorldSaysAtEachFrame) {
   }
 }
 
+// The vase in the air casts its shadow on the ground where the light's ray through it meets the
+// ground: darker there than the same ground with no body, and the ground elsewhere untouched.
+TEST(Render, TheShadowOnTheGroundIsWhereTheLightProjectsTheBody) {
+  REQUIRE_GL();
+  SceneWorld s = vase_scene();
+  World& w = *s.world;
+  while (w.time() + 1e-9 < 0.2) w.step();
+  constexpr int kW = 320, kH = 180;
+  const Camera camera = frame_camera(frame_from_world(w), static_cast<double>(kW) / kH);
+  RenderOptions options;
+  options.marks = false;
+  const DrawFrame frame = frame_from_world(w);
+  ASSERT_TRUE(frame.ground.has_value());
+  DrawFrame empty = frame;
+  empty.bodies.clear();
+  const Image img = draw(frame, camera, kW, kH, options);
+  const Image ground = draw(empty, camera, kW, kH, options);
+  // Each surface vertex sent along the light onto the ground, and the pixels of that shadow's box.
+  const Plane& plane = *frame.ground;
+  const Vec3 light = options.light.normalized();
+  const BodySurface surf = w.surface(s.bodies[0]);
+  double x0 = 1e9, x1 = -1e9, y0 = 1e9, y1 = -1e9;
+  for (const Vec3& p : surf.positions) {
+    const Vec3 q = p - light * ((plane.normal.dot(p) - plane.offset) / plane.normal.dot(light));
+    const Vec3 px = camera.project(q, kW, kH);
+    x0 = std::min(x0, px.x());
+    x1 = std::max(x1, px.x());
+    y0 = std::min(y0, px.y());
+    y1 = std::max(y1, px.y());
+  }
+  const Vec3 vase_px = camera.project(w.rigid_state(s.bodies[0]).position, kW, kH);
+  ASSERT_GT(x1 - x0, 5);
+  ASSERT_GT(vase_px.y(), 0);
+  ASSERT_LT(vase_px.y() + 0, y0) << "the vase is in the air: its shadow lies below it on screen";
+  int darker_inside = 0, inside = 0, darker_outside = 0;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const std::uint8_t* a = img.pixel(x, y);
+      const std::uint8_t* b = ground.pixel(x, y);
+      const bool darker = a[0] + a[1] + a[2] + 30 < b[0] + b[1] + b[2];
+      const bool in_box = x + 0.5 >= x0 && x + 0.5 <= x1 && y + 0.5 >= y0 && y + 0.5 <= y1;
+      const bool near_box = x + 0.5 >= x0 - 2 && x + 0.5 <= x1 + 2 && y + 0.5 >= y0 - 2 && y + 0.5 <= y1 + 2;
+      if (in_box) {
+        ++inside;
+        darker_inside += darker ? 1 : 0;
+      } else if (!near_box && y + 0.5 > vase_px.y() + 0.5 * (y0 - vase_px.y())) {
+        darker_outside += darker ? 1 : 0;  // the ground away from the shadow (below the vase itself)
+      }
+    }
+  std::printf("shadow box %.0f..%.0f x %.0f..%.0f px: %d of %d pixels darker; %d darker elsewhere\n", x0, x1, y0, y1,
+              darker_inside, inside, darker_outside);
+  EXPECT_GT(darker_inside, inside / 3);  // a tilted vase's shadow fills much of its box
+  EXPECT_EQ(darker_outside, 0);
+}
+
+// Pixels under a covered rectangle (an opaque panel) are left with the background.
+TEST(Render, CoveredRectanglesAreNotShaded) {
+  REQUIRE_GL();
+  SceneWorld s = vase_scene();
+  constexpr int kW = 320, kH = 180;
+  const DrawFrame frame = frame_from_world(*s.world);
+  const Camera camera = frame_camera(frame, static_cast<double>(kW) / kH);
+  RenderOptions options;
+  options.marks = false;
+  const Image full = draw(frame, camera, kW, kH, options);
+  options.covered = {{.x = 10, .y = 20, .width = 100, .height = 50}, {.x = 300, .y = 170, .width = 100, .height = 100}};
+  const Image part = draw(frame, camera, kW, kH, options);
+  const Vec3 bg = options.background.array().sqrt();
+  int differ_outside = 0;
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const bool covered = (x >= 10 && x < 110 && y >= 20 && y < 70) || (x >= 300 && y >= 170);
+      const std::uint8_t* a = part.pixel(x, y);
+      if (covered) {
+        for (int c = 0; c < 3; ++c) ASSERT_NEAR(a[c], 255 * bg[c], 1.5) << x << ", " << y;
+      } else {
+        const std::uint8_t* b = full.pixel(x, y);
+        differ_outside += (a[0] != b[0] || a[1] != b[1] || a[2] != b[2]) ? 1 : 0;
+      }
+    }
+  EXPECT_EQ(differ_outside, 0);
+}
+
 TEST(Render, StressViewIsRedInTensionAndGreenInCompression) {
   REQUIRE_GL();
   // A beam held far from a press on its top face: compression under the pad, tension below.

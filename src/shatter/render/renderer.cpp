@@ -138,29 +138,52 @@ void main() {
 )";
 
 // The ground: most of the picture, so as little work per pixel as possible (a software rasterizer
-// spends its time here): a checker, the sun with one bilinear shadow tap, the fade into the sky.
+// spends its time here): a checker in the sun, the fade into the sky. No shadow-map lookup: one
+// compare tap on every ground pixel cost a quarter of a frame in llvmpipe; the bodies' shadows are
+// drawn onto it afterwards as geometry (kGroundShadowVs).
 constexpr const char* kGroundFs = R"(#version 330 core
 in vec3 v_world;
-in vec4 v_light;
 uniform vec3 u_eye;
 uniform float u_sun;  // the sun's light on a level ground, dot(up, light)
-uniform sampler2DShadow u_shadow;
-uniform int u_use_shadow;
 uniform vec3 u_background;
 uniform float u_ground_fade;
 out vec4 o_color;
 void main() {
   float c = mod(floor(v_world.x * 2.0) + floor(v_world.z * 2.0), 2.0);
   vec3 albedo = mix(vec3(0.17, 0.17, 0.16), vec3(0.21, 0.21, 0.2), c);
-  float sh = 1.0;
-  if (u_use_shadow == 1) {
-    vec3 p = v_light.xyz / v_light.w * 0.5 + 0.5;
-    if (p.x > 0.0 && p.x < 1.0 && p.y > 0.0 && p.y < 1.0 && p.z < 1.0) sh = texture(u_shadow, vec3(p.xy, p.z - 0.001));
-  }
-  vec3 col = albedo * (vec3(0.38, 0.42, 0.5) + 0.95 * u_sun * sh * vec3(1.0, 0.97, 0.92));
+  vec3 col = albedo * (vec3(0.38, 0.42, 0.5) + 0.95 * u_sun * vec3(1.0, 0.97, 0.92));
   float d = length(v_world - u_eye);
   col = mix(col, u_background, smoothstep(0.3 * u_ground_fade, u_ground_fade, d));
   o_color = vec4(sqrt(col), 1.0);
+}
+)";
+
+// The bodies' shadows on the ground, exact for a directional light: each body's triangles projected
+// along the light onto the ground plane, each ground pixel darkened once (the stencil counts), by
+// the ratio of the ground's colour without the sun to its colour with it (gamma-encoded, so one
+// multiplication of what the ground shader wrote). Fades with the ground.
+constexpr const char* kGroundShadowVs = R"(#version 330 core
+layout(location = 0) in vec3 a_pos;  // body frame, m
+uniform mat4 u_model;
+uniform mat4 u_view_proj;
+uniform vec4 u_plane;      // the ground, dot(xyz, x) = w, unit normal
+uniform vec3 u_light_dir;  // toward the light, unit, dot(u_plane.xyz, u_light_dir) > 0
+out vec3 v_world;
+void main() {
+  vec3 w = (u_model * vec4(a_pos, 1.0)).xyz;
+  v_world = w - u_light_dir * ((dot(u_plane.xyz, w) - u_plane.w) / dot(u_plane.xyz, u_light_dir));
+  gl_Position = u_view_proj * vec4(v_world, 1.0);
+}
+)";
+constexpr const char* kGroundShadowFs = R"(#version 330 core
+in vec3 v_world;
+uniform vec3 u_eye;
+uniform vec3 u_shade;  // the ground's gamma-encoded colour in shadow over that in the sun
+uniform float u_ground_fade;
+out vec4 o_color;
+void main() {
+  float d = length(v_world - u_eye);
+  o_color = vec4(mix(u_shade, vec3(1.0), smoothstep(0.3 * u_ground_fade, u_ground_fade, d)), 1.0);
 }
 )";
 
@@ -350,7 +373,7 @@ enum MainPart : std::uint8_t { kOuterFaces = 0, kCrackFaces = 1, kStressView = 2
 
 struct Renderer::Impl {
   std::array<GLuint, 3> main{};  // by MainPart
-  GLuint shadow = 0, flat = 0, ground = 0;
+  GLuint shadow = 0, flat = 0, ground = 0, ground_shadow = 0;
   GLuint shadow_fbo = 0, shadow_tex = 0;
   int shadow_size = 1024;
   GLuint ground_vao = 0, ground_vbo = 0, ground_stress = 0;
@@ -363,6 +386,7 @@ struct Renderer::Impl {
     glDeleteProgram(shadow);
     glDeleteProgram(flat);
     glDeleteProgram(ground);
+    glDeleteProgram(ground_shadow);
     glDeleteFramebuffers(1, &shadow_fbo);
     glDeleteTextures(1, &shadow_tex);
     glDeleteVertexArrays(1, &ground_vao);
@@ -509,6 +533,8 @@ Result<std::unique_ptr<Renderer>> Renderer::create() {
   im.flat = *flat;
   SHATTER_TRY(ground, link(kMainVs, kGroundFs, "ground"));
   im.ground = *ground;
+  SHATTER_TRY(ground_shadow, link(kGroundShadowVs, kGroundShadowFs, "ground shadow"));
+  im.ground_shadow = *ground_shadow;
 
   glGenTextures(1, &im.shadow_tex);
   glBindTexture(GL_TEXTURE_2D, im.shadow_tex);
@@ -586,17 +612,18 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
   }
   stats.stress_scale = scale;
 
-  const Vec3 light = Vec3(0.45, 1.0, 0.3).normalized();
+  const Vec3 light = options.light.norm() > 0 && options.light.allFinite() ? Vec3(options.light.normalized())
+                                                                           : Vec3(0.45, 1.0, 0.3).normalized();
   const bool have_bounds = (frame.bounds.min.array() <= frame.bounds.max.array()).all();
   Vec3 center = have_bounds ? Vec3(0.5 * (frame.bounds.min + frame.bounds.max)) : camera.target;
-  double radius = have_bounds ? std::max(0.5 * (frame.bounds.max - frame.bounds.min).norm(), 0.25) : 1.0;
-  const double bodies_radius = radius;
-  if (frame.ground) {  // shadows fall on the ground below the bodies too
-    const double h = frame.ground->normal.dot(center) - frame.ground->offset;
-    radius = std::max(radius, std::abs(h) + 0.25);
-  }
-  radius = std::min(radius * 1.3, 200.0);
-  const Mat4 light_vp = ortho(radius, 0.01, 4 * radius) * look_at(center + 2 * radius * light, center, Vec3::UnitY());
+  const double bodies_radius = have_bounds ? std::max(0.5 * (frame.bounds.max - frame.bounds.min).norm(), 0.25) : 1.0;
+  // The shadow map covers the bodies only: their shadows on the ground are drawn as geometry.
+  const double light_radius = std::min(bodies_radius * 1.3, 200.0);
+  const Mat4 light_vp =
+      ortho(light_radius, 0.01, 4 * light_radius) * look_at(center + 2 * light_radius * light, center, Vec3::UnitY());
+  double reach = bodies_radius;  // the ground reaches well beyond the bodies and the ground below them
+  if (frame.ground) reach = std::max(reach, std::abs(frame.ground->normal.dot(center) - frame.ground->offset) + 0.25);
+  reach = std::min(reach * 1.3, 200.0);
   const double aspect = static_cast<double>(width) / std::max(height, 1);
   const Mat4 view_proj = camera.projection(aspect) * camera.view();
 
@@ -629,7 +656,23 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
   glViewport(0, 0, width, height);
   const Vec3 bg = options.background.array().max(0.0).sqrt();
   glClearColor(static_cast<float>(bg.x()), static_cast<float>(bg.y()), static_cast<float>(bg.z()), 1.0F);
-  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glClearStencil(0);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
+  // Under the panels the depth is the nearest there is: every fragment fails the depth test before
+  // it is shaded.
+  if (!options.covered.empty()) {
+    glEnable(GL_SCISSOR_TEST);
+    glClearDepth(0.0);
+    for (const PixelRect& r : options.covered) {
+      const int x0 = std::clamp(r.x, 0, width), x1 = std::clamp(r.x + r.width, 0, width);
+      const int y0 = std::clamp(height - (r.y + r.height), 0, height), y1 = std::clamp(height - r.y, 0, height);
+      if (x1 <= x0 || y1 <= y0) continue;
+      glScissor(x0, y0, x1 - x0, y1 - y0);
+      glClear(GL_DEPTH_BUFFER_BIT);
+    }
+    glClearDepth(1.0);
+    glDisable(GL_SCISSOR_TEST);
+  }
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   glDisable(GL_BLEND);
@@ -697,7 +740,7 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
   // The ground after the bodies: its fragments behind them fail the depth test before shading.
   if (options.ground && frame.ground) {
     const Plane& p = *frame.ground;
-    const double extent = std::max(50.0, 20 * radius);
+    const double extent = std::max(50.0, 20 * reach);
     Vec3 t1 = p.normal.cross(Vec3::UnitX());
     if (t1.squaredNorm() < 1e-6) t1 = p.normal.cross(Vec3::UnitZ());
     t1.normalize();
@@ -708,18 +751,50 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
     m.block<3, 1>(0, 1) = p.normal;
     m.block<3, 1>(0, 2) = extent * t1;
     m.block<3, 1>(0, 3) = origin;
+    const double sun = std::max(0.0, p.normal.dot(light));
     glUseProgram(im.ground);
     set_mat(im.ground, "u_model", m);
     set_mat(im.ground, "u_view_proj", view_proj);
-    set_mat(im.ground, "u_light_vp", light_vp);
     set_vec(im.ground, "u_eye", camera.eye());
-    set_float(im.ground, "u_sun", std::max(0.0, p.normal.dot(light)));
-    set_int(im.ground, "u_use_shadow", shadows ? 1 : 0);
-    set_int(im.ground, "u_shadow", 0);
+    set_float(im.ground, "u_sun", sun);
     set_vec(im.ground, "u_background", options.background);
     set_float(im.ground, "u_ground_fade", extent);
     glBindVertexArray(im.ground_vao);
     glDrawArrays(GL_TRIANGLES, 0, 6);
+    // The bodies' shadows on it (kGroundShadowVs): drawn where the ground is visible (depth test,
+    // pulled a little toward the eye so they do not fight the ground's depth), once per pixel.
+    if (shadows && sun > 0.05) {
+      const Vec3 ambient(0.38, 0.42, 0.5), warm(1.0, 0.97, 0.92);
+      const Vec3 shade = ambient.cwiseQuotient(ambient + 0.95 * sun * warm).cwiseSqrt();
+      const GLuint gs = im.ground_shadow;
+      glUseProgram(gs);
+      set_mat(gs, "u_view_proj", view_proj);
+      glUniform4f(glGetUniformLocation(gs, "u_plane"), static_cast<float>(p.normal.x()),
+                  static_cast<float>(p.normal.y()), static_cast<float>(p.normal.z()), static_cast<float>(p.offset));
+      set_vec(gs, "u_light_dir", light);
+      set_vec(gs, "u_eye", camera.eye());
+      set_vec(gs, "u_shade", shade);
+      set_float(gs, "u_ground_fade", extent);
+      glEnable(GL_STENCIL_TEST);
+      glStencilFunc(GL_EQUAL, 0, 0xFF);
+      glStencilOp(GL_KEEP, GL_KEEP, GL_INCR);
+      glDepthMask(GL_FALSE);
+      glDepthFunc(GL_LEQUAL);
+      glEnable(GL_POLYGON_OFFSET_FILL);
+      glPolygonOffset(-1.0F, -4.0F);
+      glEnable(GL_BLEND);
+      glBlendFunc(GL_ZERO, GL_SRC_COLOR);  // destination x shade
+      for (std::size_t i = 0; i < frame.bodies.size(); ++i) {
+        set_mat(gs, "u_model", body_matrix(frame.bodies[i]));
+        glBindVertexArray(meshes[i]->vao);
+        glDrawArrays(GL_TRIANGLES, 0, meshes[i]->count);
+      }
+      glDisable(GL_BLEND);
+      glDisable(GL_POLYGON_OFFSET_FILL);
+      glDepthFunc(GL_LESS);
+      glDepthMask(GL_TRUE);
+      glDisable(GL_STENCIL_TEST);
+    }
   }
   glBindVertexArray(0);
 
@@ -864,8 +939,8 @@ Result<std::unique_ptr<OffscreenTarget>> OffscreenTarget::create(int width, int 
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, t->color_);
   glGenRenderbuffers(1, &t->depth_);
   glBindRenderbuffer(GL_RENDERBUFFER, t->depth_);
-  glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH_COMPONENT24, width, height);
-  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, t->depth_);
+  glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH24_STENCIL8, width, height);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, t->depth_);
   if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
     return make_error("render target: the multisampled framebuffer is incomplete");
   glGenFramebuffers(1, &t->resolve_fbo_);

@@ -1,5 +1,5 @@
 // The OpenGL 3.3 core renderer behind `shatter view` and `shatter render` (docs/viewer.md): lit
-// bodies with a shadow map, a ground, per-material looks with solid textures on crack faces, the
+// bodies with a shadow map, a ground with the bodies' shadows projected onto it, per-material looks with solid textures on crack faces, the
 // stress view (the paper's Fig. 7: per tet, tension red, compression green, the larger in
 // magnitude) with its legend, and marks of impacts and crack planes. It draws into whatever
 // framebuffer is bound, in the GL context current when it was made.
@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "shatter/core/error.h"
 #include "shatter/render/camera.h"
@@ -22,6 +23,11 @@ enum class ViewMode : std::uint8_t {
   stress,    ///< display stress per tet (red tension, green compression)
 };
 
+/// A rectangle of the window, pixels, from its top-left corner.
+struct PixelRect {
+  int x = 0, y = 0, width = 0, height = 0;
+};
+
 struct RenderOptions {
   ViewMode view = ViewMode::material;
   /// Stress that takes the full colour, Pa (0: the largest magnitude in the frame, at least 1 kPa).
@@ -31,6 +37,10 @@ struct RenderOptions {
   bool legend = true;  ///< the stress view's colour bar and scale
   bool ground = true;
   Vec3 background{0.62, 0.68, 0.76};  ///< linear RGB
+  Vec3 light{0.45, 1.0, 0.3};         ///< toward the sun (a directional light), any length
+  /// Where opaque panels will be drawn over the picture: the scene is not shaded there (a software
+  /// rasterizer spends most of a frame shading), and those pixels are left with the background.
+  std::vector<PixelRect> covered;
 };
 
 /// Per frame: what it drew.
