@@ -787,11 +787,17 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
       glPolygonOffset(-1.0F, -4.0F);
       glEnable(GL_BLEND);
       glBlendFunc(GL_ZERO, GL_SRC_COLOR);  // destination x shade
+      // A closed surface's faces toward the light alone cover its shadow, and they keep their
+      // winding when projected (seen from above the ground): the others are culled.
+      glEnable(GL_CULL_FACE);
+      glCullFace(GL_BACK);
+      glFrontFace(GL_CCW);
       for (std::size_t i = 0; i < frame.bodies.size(); ++i) {
         set_mat(gs, "u_model", body_matrix(frame.bodies[i]));
         glBindVertexArray(meshes[i]->vao);
         glDrawArrays(GL_TRIANGLES, 0, meshes[i]->count);
       }
+      glDisable(GL_CULL_FACE);
       glDisable(GL_BLEND);
       glDisable(GL_POLYGON_OFFSET_FILL);
       glDepthFunc(GL_LESS);
