@@ -39,6 +39,9 @@ class ContactBatches {
   /// they are until store(). `bodies`: the solver bodies the constraints index.
   void build(std::span<ContactConstraint* const> constraints, std::span<const SolverBody> bodies);
 
+  /// measure_approach on every constraint (at each substep's start, before warm_start).
+  void measure_approach(std::span<const SolverBody> bodies);
+
   /// warm_start_contact on every constraint, in the solving order.
   void warm_start(std::span<SolverBody> bodies);
 

@@ -67,7 +67,7 @@ struct ContactPoint {
   double normal_impulse = 0;  ///< accumulated (warm start), N s
   double lever_arm = 0;       ///< distance to the friction centre, m (twist bound)
   /// Fastest approach (minus the relative normal velocity, m/s, > 0 approaching) met at the start
-  /// of the step or before any biased pass of its substeps: the impact speed.
+  /// of the step or of any of its substeps (measure_approach): the impact speed.
   double approach_speed = 0;
   double max_normal_impulse = 0;  ///< largest accumulated normal impulse in the step, N s
   /// Everything applied along the normal during the step, over all substeps and passes (warm
@@ -123,6 +123,13 @@ struct ContactSolverSettings {
 /// the warm-start impulses the caller put in and zeroes the step totals. `speculative_distance`
 /// (m) fades points with a gap out of the friction centre.
 void prepare_contact(ContactConstraint& c, std::span<const SolverBody> bodies, double speculative_distance);
+
+/// Raise each point's approach speed to the closing speed of the bodies' velocities now (reads
+/// them only). Called at each substep's start, before any of its impulses: the velocities are then
+/// the last substep's relaxed ones plus gravity. Measured during the biased pass instead, the
+/// approach would include the push-out that the pass gives overlapping pieces (up to the push-out
+/// cap at the next contact of a pushed body), which the relax pass takes out again.
+void measure_approach(ContactConstraint& c, std::span<const SolverBody> bodies);
 
 /// Apply the accumulated impulses (warm start), adding them to the step totals.
 void warm_start_contact(ContactConstraint& c, std::span<SolverBody> bodies);

@@ -224,6 +224,16 @@ struct WideMotion {
   add_friction_total(w, w.friction_impulse[0], w.friction_impulse[1]);
 }
 
+// measure_approach on four constraints.
+[[gnu::always_inline]] inline void measure_approach_wide(WideContact& w, std::span<const SolverBody> bodies) {
+  const WideMotion m(w, bodies);
+  for (int k = 0; k < w.count; ++k) {
+    WidePoint& p = w.points[k];
+    const Lanes approach = -m.row_velocity(w.normal, p.rn_a, p.rn_b);
+    p.approach_speed = SHATTER_LANE_MAX(p.approach_speed, approach);
+  }
+}
+
 struct PassArgs {
   double inverse_h;
   bool use_bias;
@@ -254,10 +264,6 @@ struct PassArgs {
     WidePoint& p = w.points[k];
     const Lanes s =
         p.separation + centre_gap + (dot(normal_in_b, p.local_anchor_b) - dot(normal_in_a, p.local_anchor_a));
-    if (args.use_bias) {
-      const Lanes approach = -m.row_velocity(w.normal, p.rn_a, p.rn_b);
-      p.approach_speed = SHATTER_LANE_MAX(p.approach_speed, approach);
-    }
     // Speculative (a gap): close it within the substep, no more; else soft push-out (biased pass)
     // or nothing (relax).
     const LaneMask gap = s > zero;
@@ -328,6 +334,12 @@ struct PassArgs {
 void warm_start_baseline(std::span<WideContact> batches, std::span<SolverBody> bodies) {
   for (WideContact& w : batches) warm_start_wide(w, bodies);
 }
+[[gnu::target("avx2")]] void measure_approach_avx2(std::span<WideContact> batches, std::span<const SolverBody> bodies) {
+  for (WideContact& w : batches) measure_approach_wide(w, bodies);
+}
+void measure_approach_baseline(std::span<WideContact> batches, std::span<const SolverBody> bodies) {
+  for (WideContact& w : batches) measure_approach_wide(w, bodies);
+}
 [[gnu::target("avx2")]] void solve_avx2(std::span<WideContact> batches, std::span<SolverBody> bodies,
                                         const PassArgs& args) {
   for (WideContact& w : batches) solve_wide(w, bodies, args);
@@ -392,6 +404,14 @@ void ContactBatches::build(std::span<ContactConstraint* const> constraints, std:
       }
     }
   }
+}
+
+void ContactBatches::measure_approach(std::span<const SolverBody> bodies) {
+  if (simd_isa() == SimdIsa::avx2)
+    measure_approach_avx2(wide_, bodies);
+  else
+    measure_approach_baseline(wide_, bodies);
+  for (ContactConstraint* c : overflow_) shatter::measure_approach(*c, bodies);
 }
 
 void ContactBatches::warm_start(std::span<SolverBody> bodies) {

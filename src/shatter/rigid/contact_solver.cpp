@@ -173,6 +173,14 @@ void warm_start_contact(ContactConstraint& c, std::span<SolverBody> bodies) {
   c.total_friction_impulse += c.friction_impulse.x() * c.tangents[0] + c.friction_impulse.y() * c.tangents[1];
 }
 
+void measure_approach(ContactConstraint& c, std::span<const SolverBody> bodies) {
+  const PairMotion m(c, bodies);
+  for (int i = 0; i < c.count; ++i) {
+    ContactPoint& p = c.points[i];
+    p.approach_speed = std::max(p.approach_speed, -m.row_velocity(c.normal, p.rn_a, p.rn_b));
+  }
+}
+
 void solve_contact(ContactConstraint& c, std::span<SolverBody> bodies, double inverse_h, bool use_bias,
                    double max_push_velocity) {
   PairMotion m(c, bodies);
@@ -189,11 +197,6 @@ void solve_contact(ContactConstraint& c, std::span<SolverBody> bodies, double in
     ContactPoint& p = c.points[i];
     const double s =
         p.separation + centre_gap + (normal_in_b.dot(p.local_anchor_b) - normal_in_a.dot(p.local_anchor_a));
-    if (use_bias) {
-      // The fastest approach met before a solve in this step: the impact speed, which the step's
-      // start velocity underestimates by up to g dt when the impact falls late in the step.
-      p.approach_speed = std::max(p.approach_speed, -m.row_velocity(c.normal, p.rn_a, p.rn_b));
-    }
     if (s > 0) {
       solve_normal(c, p, m, s * inverse_h, 1, 0);  // speculative: close the gap within the substep, no more
     } else if (use_bias) {

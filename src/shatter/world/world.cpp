@@ -912,6 +912,7 @@ void World::solve() {
           if (bodies_[i].type == BodyType::dynamic) solver_bodies_[i].linear_velocity += dv_gravity;
         },
         settings_.parallel_min_bodies);
+    contact_batches_.measure_approach(solver_bodies_);
     contact_batches_.warm_start(solver_bodies_);
     contact_batches_.solve(solver_bodies_, inverse_h, true, settings_.contact.max_push_velocity);
     // Drift in groups of four bodies (integrate_positions: side by side in vector lanes).
