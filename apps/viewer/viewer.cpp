@@ -838,6 +838,7 @@ int Viewer::run() {
   glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
   glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
   glfwWindowHint(GLFW_SAMPLES, opt_.msaa);
+  glfwWindowHint(GLFW_STENCIL_BITS, 8);  // the ground's shadows count pixels in it
   window_ = glfwCreateWindow(opt_.width, opt_.height, "shatter", nullptr, nullptr);
   if (!window_) {
     std::fprintf(stderr,

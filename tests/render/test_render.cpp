@@ -250,13 +250,28 @@ TEST(Render, TheShadowOnTheGroundIsWhereTheLightProjectsTheBody) {
   ASSERT_GT(x1 - x0, 5);
   ASSERT_GT(vase_px.y(), 0);
   ASSERT_LT(vase_px.y() + 0, y0) << "the vase is in the air: its shadow lies below it on screen";
-  int darker_inside = 0, inside = 0, darker_outside = 0;
+  // In shadow the ground keeps its colour without the sun: per channel (gamma-encoded) the ratio
+  // sqrt(ambient / (ambient + 0.95 sun warm)) of the ground shader's formula, once, however many
+  // of the vase's faces cover the pixel (the stencil).
+  const double sun = plane.normal.dot(light);
+  const Vec3 ambient(0.38, 0.42, 0.5), warm(1.0, 0.97, 0.92);
+  const Vec3 shade = ambient.cwiseQuotient(ambient + 0.95 * sun * warm).cwiseSqrt();
+  int darker_inside = 0, inside = 0, darker_outside = 0, at_shade = 0, too_dark = 0;
   for (int y = 0; y < kH; ++y)
     for (int x = 0; x < kW; ++x) {
       const std::uint8_t* a = img.pixel(x, y);
       const std::uint8_t* b = ground.pixel(x, y);
       const bool darker = a[0] + a[1] + a[2] + 30 < b[0] + b[1] + b[2];
       const bool in_box = x + 0.5 >= x0 && x + 0.5 <= x1 && y + 0.5 >= y0 && y + 0.5 <= y1;
+      if (darker && in_box) {  // the ground in shadow (the vase itself is drawn above the box)
+        bool matches = true;
+        for (int c = 0; c < 3; ++c) {
+          const double ratio = (a[c] + 0.5) / (b[c] + 0.5);
+          matches = matches && std::abs(ratio - shade[c]) < 0.03;
+          too_dark += ratio < shade[c] - 0.05 ? 1 : 0;
+        }
+        at_shade += matches ? 1 : 0;
+      }
       const bool near_box = x + 0.5 >= x0 - 2 && x + 0.5 <= x1 + 2 && y + 0.5 >= y0 - 2 && y + 0.5 <= y1 + 2;
       if (in_box) {
         ++inside;
@@ -267,8 +282,12 @@ TEST(Render, TheShadowOnTheGroundIsWhereTheLightProjectsTheBody) {
     }
   std::printf("shadow box %.0f..%.0f x %.0f..%.0f px: %d of %d pixels darker; %d darker elsewhere\n", x0, x1, y0, y1,
               darker_inside, inside, darker_outside);
+  std::printf("shade %.3f %.3f %.3f: %d darker pixels at it, %d channels darker than it\n", shade[0], shade[1],
+              shade[2], at_shade, too_dark);
   EXPECT_GT(darker_inside, inside / 3);  // a tilted vase's shadow fills much of its box
   EXPECT_EQ(darker_outside, 0);
+  EXPECT_GT(at_shade, darker_inside * 3 / 4);  // the rest: the shadow's multisampled edge
+  EXPECT_EQ(too_dark, 0);                      // no pixel darkened twice
 }
 
 // Pixels under a covered rectangle (an opaque panel) are left with the background.
@@ -281,15 +300,21 @@ TEST(Render, CoveredRectanglesAreNotShaded) {
   RenderOptions options;
   options.marks = false;
   const Image full = draw(frame, camera, kW, kH, options);
-  options.covered = {{.x = 10, .y = 20, .width = 100, .height = 50}, {.x = 300, .y = 170, .width = 100, .height = 100}};
+  // One rectangle on the ground in the lower left, one past the lower right corner.
+  options.covered = {{.x = 10, .y = 120, .width = 100, .height = 50},
+                     {.x = 300, .y = 170, .width = 100, .height = 100}};
   const Image part = draw(frame, camera, kW, kH, options);
+  options.covered.clear();
+  EXPECT_EQ(draw(frame, camera, kW, kH, options).rgba, full.rgba);  // nothing of it stays for the next frame
   const Vec3 bg = options.background.array().sqrt();
-  int differ_outside = 0;
+  int differ_outside = 0, ground_under = 0;
   for (int y = 0; y < kH; ++y)
     for (int x = 0; x < kW; ++x) {
-      const bool covered = (x >= 10 && x < 110 && y >= 20 && y < 70) || (x >= 300 && y >= 170);
+      const bool covered = (x >= 10 && x < 110 && y >= 120 && y < 170) || (x >= 300 && y >= 170);
       const std::uint8_t* a = part.pixel(x, y);
       if (covered) {
+        const std::uint8_t* b = full.pixel(x, y);
+        ground_under += std::abs(b[0] - 255 * bg[0]) + std::abs(b[1] - 255 * bg[1]) > 20 ? 1 : 0;
         for (int c = 0; c < 3; ++c) ASSERT_NEAR(a[c], 255 * bg[c], 1.5) << x << ", " << y;
       } else {
         const std::uint8_t* b = full.pixel(x, y);
@@ -297,6 +322,7 @@ TEST(Render, CoveredRectanglesAreNotShaded) {
       }
     }
   EXPECT_EQ(differ_outside, 0);
+  EXPECT_GT(ground_under, 4000);  // the covered pixels would have shown the ground, not the sky
 }
 
 TEST(Render, StressViewIsRedInTensionAndGreenInCompression) {

@@ -79,12 +79,14 @@ std::vector<ContactConstraint*> pointers(std::vector<ContactConstraint>& cs) {
   return out;
 }
 
-// Three substeps of warm start, biased pass and relax pass (without moving the bodies).
+// Three substeps of approach measurement, warm start, biased pass and relax pass (without moving
+// the bodies).
 void run_batched(Problem& s) {
   ContactBatches batches;
   const auto list = pointers(s.constraints);
   batches.build(list, s.bodies);
   for (int sub = 0; sub < 3; ++sub) {
+    batches.measure_approach(s.bodies);
     batches.warm_start(s.bodies);
     batches.solve(s.bodies, 480, true, 3);
     batches.solve(s.bodies, 480, false, 3);
@@ -132,6 +134,7 @@ TEST(ContactBatches, FourAtATimeGiveWhatOneAtATimeGivesInTheSameOrder) {
       if (c != nullptr) sequence.push_back(c);
   for (ContactConstraint* c : order.overflow()) sequence.push_back(c);
   for (int sub = 0; sub < 3; ++sub) {
+    for (ContactConstraint* c : sequence) measure_approach(*c, single.bodies);
     for (ContactConstraint* c : sequence) warm_start_contact(*c, single.bodies);
     for (ContactConstraint* c : sequence) solve_contact(*c, single.bodies, 480, true, 3);
     for (ContactConstraint* c : sequence) solve_contact(*c, single.bodies, 480, false, 3);
@@ -153,8 +156,14 @@ TEST(ContactBatches, FourAtATimeGiveWhatOneAtATimeGivesInTheSameOrder) {
       EXPECT_EQ(b.points[i].approach_speed, o.points[i].approach_speed);
     }
   }
-  // Something happened: the velocities moved.
+  // Something happened: the velocities moved, and later substeps raised approach speeds above
+  // what the constraints were prepared with.
   const Problem start = random_setup(60, 400, 5);
+  int raised = 0;
+  for (std::size_t k = 0; k < start.constraints.size(); ++k)
+    for (int i = 0; i < start.constraints[k].count; ++i)
+      raised += batched.constraints[k].points[i].approach_speed > start.constraints[k].points[i].approach_speed;
+  EXPECT_GT(raised, 10);
   double moved = 0;
   for (std::size_t i = 0; i < start.bodies.size(); ++i)
     moved = std::max(moved, (batched.bodies[i].linear_velocity - start.bodies[i].linear_velocity).norm());
@@ -179,9 +188,12 @@ TEST(ContactBatches, BaselineAndAvx2GiveTheSameBits) {
     EXPECT_EQ(bits(baseline.bodies[i].angular_velocity), bits(avx2.bodies[i].angular_velocity)) << i;
   }
   for (std::size_t k = 0; k < baseline.constraints.size(); ++k)
-    for (int i = 0; i < baseline.constraints[k].count; ++i)
+    for (int i = 0; i < baseline.constraints[k].count; ++i) {
       EXPECT_EQ(baseline.constraints[k].points[i].total_normal_impulse,
                 avx2.constraints[k].points[i].total_normal_impulse);
+      EXPECT_EQ(std::bit_cast<std::uint64_t>(baseline.constraints[k].points[i].approach_speed),
+                std::bit_cast<std::uint64_t>(avx2.constraints[k].points[i].approach_speed));
+    }
 }
 
 }  // namespace

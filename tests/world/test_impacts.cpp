@@ -416,9 +416,9 @@ TEST(Impacts, RestingBodiesNeverCrack) {
   EXPECT_EQ(w.live_body_count(), 7);
 }
 
-// A block dropped onto one resting on the ground: the lower block's blow on the ground can be no
-// faster than the falling block (the solver passes the blow down within a substep; measured inside
-// its biased pass, after the first points' impulses, it read 35 % faster than the fall).
+// A block dropped onto one resting on the ground: neither block's impact is faster than the fall.
+// The solver hands the blow down the stack within a substep; the approach speed must not count
+// the impulses it applies on the way (measure_approach).
 TEST(Impacts, ABlowThroughAStackIsNoFasterThanTheFall) {
   World w;
   w.add_plane({.normal = Vec3::UnitY(), .offset = 0});
@@ -426,29 +426,30 @@ TEST(Impacts, ABlowThroughAStackIsNoFasterThanTheFall) {
   const auto box = scenes::box_model(Vec3(0.2, 0.1, 0.1), unbreakable, {4, 2, 2});
   RigidState lower;
   lower.position = Vec3(0, 0.1005, 0);
-  ASSERT_OK(w.add_body(box, {.rigid = lower}));
+  auto lower_id = w.add_body(box, {.rigid = lower});
+  ASSERT_OK(lower_id);
   for (int step = 0; step < 30; ++step) w.step();  // settled on the ground
   const double height = 1.0;
   RigidState upper;
   upper.position = Vec3(0, 0.3 + height, 0);
   upper.orientation = Quat(Eigen::AngleAxisd(0.5 * std::numbers::pi, Vec3::UnitY()));
-  ASSERT_OK(w.add_body(box, {.rigid = upper}));
+  auto upper_id = w.add_body(box, {.rigid = upper});
+  ASSERT_OK(upper_id);
   const double fall = std::sqrt(2 * 9.81 * height);
-  double fastest_on_ground = 0, fastest_on_block = 0;
+  double lower_impact = 0, upper_impact = 0;
   for (int step = 0; step < 40; ++step) {
     w.step();
     for (const ImpactRecord& e : w.events().impacts) {
-      std::printf("  t %.3f body %d on %d: %.2f m/s\n", e.time, static_cast<int>(e.body.index),
-                  static_cast<int>(e.other.index), e.approach_speed);
-      (e.other.index == 0 ? fastest_on_ground : fastest_on_block) =
-          std::max(e.other.index == 0 ? fastest_on_ground : fastest_on_block, e.approach_speed);
+      if (e.body == *lower_id) lower_impact = std::max(lower_impact, e.approach_speed);
+      if (e.body == *upper_id) upper_impact = std::max(upper_impact, e.approach_speed);
     }
   }
-  std::printf("fall %.2f m/s: blow on the lower block %.2f m/s, on the ground %.2f m/s\n", fall, fastest_on_block,
-              fastest_on_ground);
-  EXPECT_GT(fastest_on_block, 0.95 * fall);
-  EXPECT_LT(fastest_on_block, 1.02 * fall);
-  EXPECT_LT(fastest_on_ground, 1.02 * fall);
+  std::printf("fall %.2f m/s: the upper block's impact %.2f m/s, the lower block's %.2f m/s\n", fall, upper_impact,
+              lower_impact);
+  EXPECT_GT(upper_impact, 0.95 * fall);
+  EXPECT_LT(upper_impact, 1.02 * fall);
+  EXPECT_GT(lower_impact, 0.5 * fall);  // analysed: it takes the blow between the block and the ground
+  EXPECT_LT(lower_impact, 1.02 * fall);
 }
 
 std::uint64_t vase_drop_hash(int threads, int restore_at) {

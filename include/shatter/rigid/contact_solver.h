@@ -1,7 +1,8 @@
 // Contact response: a soft-step solver after Box2D v3 and Box3D (Catto, "Solver2D", 2024;
-// docs/method.md §2.8). Each step is split into substeps; per substep the bodies take gravity, the
-// contacts are warm-started with the impulses they carried, solved once with a soft position bias
-// (a spring of `contact_hertz` and damping ratio `damping_ratio`, push-out capped at
+// docs/method.md §2.8). Each step is split into substeps; per substep the bodies take gravity,
+// each contact point records how fast it is closing (measure_approach, before any impulse of the
+// substep), the contacts are warm-started with the impulses they carried, solved once with a soft
+// position bias (a spring of `contact_hertz` and damping ratio `damping_ratio`, push-out capped at
 // `max_push_velocity`), the positions are integrated, and the contacts are solved once more without
 // bias (relax). After the substeps one restitution pass restores the bounce of contacts that
 // approached faster than `restitution_threshold`. Contacts with a gap (speculative) remove only the
@@ -128,7 +129,10 @@ void prepare_contact(ContactConstraint& c, std::span<const SolverBody> bodies, d
 /// them only). Called at each substep's start, before any of its impulses: the velocities are then
 /// the last substep's relaxed ones plus gravity. Measured during the biased pass instead, the
 /// approach would include the push-out that the pass gives overlapping pieces (up to the push-out
-/// cap at the next contact of a pushed body), which the relax pass takes out again.
+/// cap at the next contact of a pushed body), which the relax pass takes out again. A resting
+/// contact reads the substep's gravity, g h (0.02 m/s at 8 substeps of 1/60 s): far below the
+/// default restitution and impact thresholds (1 m/s); thresholds below it would make resting
+/// bodies with restitution bounce.
 void measure_approach(ContactConstraint& c, std::span<const SolverBody> bodies);
 
 /// Apply the accumulated impulses (warm start), adding them to the step totals.

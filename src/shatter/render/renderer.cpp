@@ -138,9 +138,9 @@ void main() {
 )";
 
 // The ground: most of the picture, so as little work per pixel as possible (a software rasterizer
-// spends its time here): a checker in the sun, the fade into the sky. No shadow-map lookup: one
-// compare tap on every ground pixel cost a quarter of a frame in llvmpipe; the bodies' shadows are
-// drawn onto it afterwards as geometry (kGroundShadowVs).
+// spends its time here): a checker in the sun, the fade into the sky. No shadow-map lookup, which
+// would cost every ground pixel a filtered compare tap: the bodies' shadows are drawn onto it
+// afterwards as geometry (kGroundShadowVs).
 constexpr const char* kGroundFs = R"(#version 330 core
 in vec3 v_world;
 uniform vec3 u_eye;
@@ -171,7 +171,9 @@ uniform vec3 u_light_dir;  // toward the light, unit, dot(u_plane.xyz, u_light_d
 out vec3 v_world;
 void main() {
   vec3 w = (u_model * vec4(a_pos, 1.0)).xyz;
-  v_world = w - u_light_dir * ((dot(u_plane.xyz, w) - u_plane.w) / dot(u_plane.xyz, u_light_dir));
+  // Along the light down to the ground; a point below it stays where it is, hidden by the ground.
+  float t = max(dot(u_plane.xyz, w) - u_plane.w, 0.0) / dot(u_plane.xyz, u_light_dir);
+  v_world = w - u_light_dir * t;
   gl_Position = u_view_proj * vec4(v_world, 1.0);
 }
 )";
@@ -296,6 +298,17 @@ void set_grain(GLuint program, Appearance::Grain grain) {
   set_float(program, "u_bands", bands);
 }
 
+// Whether the framebuffer drawn into has stencil bits (the ground's shadows count on them).
+bool has_stencil(GLint target) {
+  const GLenum attachment = target == 0 ? GL_STENCIL : GL_STENCIL_ATTACHMENT;
+  GLint type = GL_NONE;
+  glGetFramebufferAttachmentParameteriv(GL_FRAMEBUFFER, attachment, GL_FRAMEBUFFER_ATTACHMENT_OBJECT_TYPE, &type);
+  if (type == GL_NONE) return false;
+  GLint bits = 0;
+  glGetFramebufferAttachmentParameteriv(GL_FRAMEBUFFER, attachment, GL_FRAMEBUFFER_ATTACHMENT_STENCIL_SIZE, &bits);
+  return bits > 0;
+}
+
 Mat4 body_matrix(const DrawBody& b) {
   Mat4 m = Mat4::Identity();
   m.block<3, 3>(0, 0) = b.orientation.normalized().toRotationMatrix();
@@ -375,9 +388,8 @@ struct Renderer::Impl {
   std::array<GLuint, 3> main{};  // by MainPart
   GLuint shadow = 0, flat = 0, ground = 0, ground_shadow = 0;
   GLuint shadow_fbo = 0, shadow_tex = 0;
-  // The map spans the bodies only (their shadows on the ground are geometry), so 512² gives them
-  // about the texel size 1024² gave when it spanned the ground below as well; clearing and filling
-  // a 1024² map took about a tenth of llvmpipe's time.
+  // The map spans the bodies only (their shadows on the ground are geometry): 512² texels over the
+  // bodies' bounding sphere. A software rasterizer pays for every texel it clears and fills.
   int shadow_size = 512;
   GLuint ground_vao = 0, ground_vbo = 0, ground_stress = 0;
   GLuint flat_vao = 0, flat_vbo = 0;
@@ -766,7 +778,7 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
     glDrawArrays(GL_TRIANGLES, 0, 6);
     // The bodies' shadows on it (kGroundShadowVs): drawn where the ground is visible (depth test,
     // pulled a little toward the eye so they do not fight the ground's depth), once per pixel.
-    if (shadows && sun > 0.05) {
+    if (shadows && sun > 0.05 && has_stencil(target)) {
       const Vec3 ambient(0.38, 0.42, 0.5), warm(1.0, 0.97, 0.92);
       const Vec3 shade = ambient.cwiseQuotient(ambient + 0.95 * sun * warm).cwiseSqrt();
       const GLuint gs = im.ground_shadow;

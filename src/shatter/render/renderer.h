@@ -1,8 +1,10 @@
 // The OpenGL 3.3 core renderer behind `shatter view` and `shatter render` (docs/viewer.md): lit
-// bodies with a shadow map, a ground with the bodies' shadows projected onto it, per-material looks with solid textures on crack faces, the
-// stress view (the paper's Fig. 7: per tet, tension red, compression green, the larger in
-// magnitude) with its legend, and marks of impacts and crack planes. It draws into whatever
-// framebuffer is bound, in the GL context current when it was made.
+// bodies with a shadow map, a ground with the bodies' shadows projected onto it, per-material
+// looks with solid textures on crack faces, the stress view (the paper's Fig. 7: per tet, tension
+// red, compression green, the larger in magnitude) with its legend, and marks of impacts and crack
+// planes. It draws into whatever framebuffer is bound, in the GL context current when it was made;
+// that framebuffer needs a depth buffer and, for the ground's shadows, a stencil buffer (without
+// one, the ground is drawn without the bodies' shadows).
 #pragma once
 
 #include <cstdint>
@@ -23,7 +25,8 @@ enum class ViewMode : std::uint8_t {
   stress,    ///< display stress per tet (red tension, green compression)
 };
 
-/// A rectangle of the window, pixels, from its top-left corner.
+/// A rectangle of the framebuffer drawn into (the width x height given to Renderer::draw), pixels,
+/// from its top-left corner.
 struct PixelRect {
   int x = 0, y = 0, width = 0, height = 0;
 };
@@ -39,7 +42,8 @@ struct RenderOptions {
   Vec3 background{0.62, 0.68, 0.76};  ///< linear RGB
   Vec3 light{0.45, 1.0, 0.3};         ///< toward the sun (a directional light), any length
   /// Where opaque panels will be drawn over the picture: the scene is not shaded there (a software
-  /// rasterizer spends most of a frame shading), and those pixels are left with the background.
+  /// rasterizer spends most of a frame shading). Those pixels keep the background, but for the
+  /// marks and the stress legend, which are drawn over everything.
   std::vector<PixelRect> covered;
 };
 
