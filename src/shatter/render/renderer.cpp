@@ -144,14 +144,15 @@ void main() {
 constexpr const char* kGroundFs = R"(#version 330 core
 in vec3 v_world;
 uniform vec3 u_eye;
-uniform float u_sun;  // the sun's light on a level ground, dot(up, light)
+uniform vec3 u_sky;        // ambient light from the sky
+uniform vec3 u_sun_light;  // the sun's light on the level ground
 uniform vec3 u_background;
 uniform float u_ground_fade;
 out vec4 o_color;
 void main() {
   float c = mod(floor(v_world.x * 2.0) + floor(v_world.z * 2.0), 2.0);
   vec3 albedo = mix(vec3(0.17, 0.17, 0.16), vec3(0.21, 0.21, 0.2), c);
-  vec3 col = albedo * (vec3(0.38, 0.42, 0.5) + 0.95 * u_sun * vec3(1.0, 0.97, 0.92));
+  vec3 col = albedo * (u_sky + u_sun_light);
   float d = length(v_world - u_eye);
   col = mix(col, u_background, smoothstep(0.3 * u_ground_fade, u_ground_fade, d));
   o_color = vec4(sqrt(col), 1.0);
@@ -628,7 +629,7 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
   stats.stress_scale = scale;
 
   const Vec3 light = options.light.norm() > 0 && options.light.allFinite() ? Vec3(options.light.normalized())
-                                                                           : Vec3(0.45, 1.0, 0.3).normalized();
+                                                                           : Vec3(RenderOptions{}.light.normalized());
   const bool have_bounds = (frame.bounds.min.array() <= frame.bounds.max.array()).all();
   Vec3 center = have_bounds ? Vec3(0.5 * (frame.bounds.min + frame.bounds.max)) : camera.target;
   const double bodies_radius = have_bounds ? std::max(0.5 * (frame.bounds.max - frame.bounds.min).norm(), 0.25) : 1.0;
@@ -766,12 +767,15 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
     m.block<3, 1>(0, 1) = p.normal;
     m.block<3, 1>(0, 2) = extent * t1;
     m.block<3, 1>(0, 3) = origin;
+    // The ground's light; in the shadows the sun's part is missing (kGroundShadowVs).
     const double sun = std::max(0.0, p.normal.dot(light));
+    const Vec3 sky(0.38, 0.42, 0.5), sun_light = 0.95 * sun * Vec3(1.0, 0.97, 0.92);
     glUseProgram(im.ground);
     set_mat(im.ground, "u_model", m);
     set_mat(im.ground, "u_view_proj", view_proj);
     set_vec(im.ground, "u_eye", camera.eye());
-    set_float(im.ground, "u_sun", sun);
+    set_vec(im.ground, "u_sky", sky);
+    set_vec(im.ground, "u_sun_light", sun_light);
     set_vec(im.ground, "u_background", options.background);
     set_float(im.ground, "u_ground_fade", extent);
     glBindVertexArray(im.ground_vao);
@@ -779,8 +783,7 @@ RenderStats Renderer::draw(const DrawFrame& frame, const Camera& camera, int wid
     // The bodies' shadows on it (kGroundShadowVs): drawn where the ground is visible (depth test,
     // pulled a little toward the eye so they do not fight the ground's depth), once per pixel.
     if (shadows && sun > 0.05 && has_stencil(target)) {
-      const Vec3 ambient(0.38, 0.42, 0.5), warm(1.0, 0.97, 0.92);
-      const Vec3 shade = ambient.cwiseQuotient(ambient + 0.95 * sun * warm).cwiseSqrt();
+      const Vec3 shade = sky.cwiseQuotient(sky + sun_light).cwiseSqrt();  // gamma-encoded, as the ground
       const GLuint gs = im.ground_shadow;
       glUseProgram(gs);
       set_mat(gs, "u_view_proj", view_proj);
