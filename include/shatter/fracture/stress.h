@@ -29,6 +29,12 @@ TetStress analyze_stress(const Mat3& sigma);
 /// depend on the thread count.
 std::vector<TetStress> compute_stresses(const FemModel& model, const std::vector<Vec3>& deformed);
 
+/// The same where the tets with at_rest[e] != 0 (#tets) are known to be undeformed (all four
+/// corners held at their rest positions, as the far field of an impact): their stress is exactly
+/// zero (TetStress{}) and is not computed. The other tets get the bits compute_stresses gives.
+std::vector<TetStress> compute_stresses(const FemModel& model, const std::vector<Vec3>& deformed,
+                                        const std::vector<char>& at_rest);
+
 /// The same from given stress tensors (Pa, #tets), e.g. from another solver or a test field.
 std::vector<TetStress> analyze_stresses(const std::vector<Mat3>& sigma);
 

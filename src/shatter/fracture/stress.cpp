@@ -64,6 +64,35 @@ std::vector<TetStress> compute_stresses(const FemModel& model, const std::vector
   return out;
 }
 
+std::vector<TetStress> compute_stresses(const FemModel& model, const std::vector<Vec3>& deformed,
+                                        const std::vector<char>& at_rest) {
+  SHATTER_CHECK(static_cast<Index>(deformed.size()) == model.num_nodes && at_rest.size() == model.tets.size());
+  std::vector<Index> active;
+  active.reserve(model.tets.size());
+  for (std::size_t e = 0; e < at_rest.size(); ++e)
+    if (!at_rest[e]) active.push_back(static_cast<Index>(e));
+  std::vector<TetStress> out(model.tets.size());
+  constexpr std::int64_t kGroup = 64;  // deformed tets per task, as in compute_stresses
+  parallel_for(
+      0, (static_cast<std::int64_t>(active.size()) + kGroup - 1) / kGroup,
+      [&](std::int64_t g) {
+        const auto first = static_cast<std::size_t>(g * kGroup);
+        const std::size_t n = std::min<std::size_t>(kGroup, active.size() - first);
+        std::array<Mat3, kGroup> sigma;
+        std::array<TetStress, kGroup> analysed;
+        for (std::size_t k = 0; k < n; ++k) {
+          const auto t = static_cast<std::size_t>(active[first + k]);
+          Mat34 x;
+          for (int c = 0; c < 4; ++c) x.col(c) = deformed[static_cast<std::size_t>(model.tets[t][c])];
+          sigma[k] = cauchy_stress(model.model, model.lame, deformation_gradient(model.rest[t], x));
+        }
+        analyze_range(std::span(sigma.data(), n), std::span(analysed.data(), n));
+        for (std::size_t k = 0; k < n; ++k) out[static_cast<std::size_t>(active[first + k])] = analysed[k];
+      },
+      8);
+  return out;
+}
+
 std::vector<TetStress> analyze_stresses(const std::vector<Mat3>& sigma) {
   std::vector<TetStress> out(sigma.size());
   constexpr std::int64_t kGroup = 64;

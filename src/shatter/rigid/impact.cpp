@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "shatter/core/assert.h"
+#include "shatter/core/parallel.h"
 #include "shatter/fracture/cut.h"
 #include "shatter/fracture/fragments.h"
 #include "shatter/fracture/stress.h"
@@ -280,49 +281,57 @@ void make_children(const BodyModel& model, const RigidState& rigid, const Fractu
   }
   const Mat3 to_world = rigid.orientation.toRotationMatrix();
   const double tolerance = 1e-7 * std::max(body_radius, 1e-3);
-  std::vector<Index> same_rest;
-  for (std::size_t k = 0; k < fr.fragments.size(); ++k) {
-    if (!keep[k]) continue;
-    const Fragment& f = fr.fragments[k];
-    const Vec3 c = f.mass.center;
-    auto m = std::make_shared<BodyModel>();
-    m->mesh = f.mesh;
-    for (Vec3& p : m->mesh.positions) p -= c;
-    m->faces = compute_faces(m->mesh);
-    m->surface = boundary_surface(m->mesh, m->faces);
-    // Tets the cut and plasticity left as they were keep the parent's rest data.
-    same_rest.resize(f.tet_map.size());
-    for (std::size_t e = 0; e < f.tet_map.size(); ++e) {
-      const Index pt = fr.tet_parent[f.tet_map[e]];
-      bool same = true;
-      for (int corner = 0; corner < 4 && same; ++corner)
-        same = f.mesh.positions[f.mesh.tets[e][corner]] == model.mesh.positions[model.mesh.tets[pt][corner]];
-      same_rest[e] = same ? pt : -1;
-    }
-    m->fem = make_fem_model(m->mesh, child_material, model.fem.model, {.model = &model.fem, .tet = same_rest});
-    m->mass = mass_properties(m->mesh, child_material.density);
-    m->material_origin = model.material_origin + c;
-    ImpactChild child;
-    child.origin = c;
-    child.unchanged_parent_tet = same_rest;
-    child.parent_tet.resize(f.tet_map.size());
-    child.plastic_strain.resize(f.tet_map.size());
-    for (std::size_t e = 0; e < f.tet_map.size(); ++e) {
-      child.parent_tet[e] = fr.tet_parent[f.tet_map[e]];
-      child.plastic_strain[e] = fr.plastic_strain[f.tet_map[e]];
-    }
-    if (!strength.empty())
-      for (const Index e : child.parent_tet) child.tensile_strength.push_back(strength[static_cast<std::size_t>(e)]);
-    m->crack_face = child_crack_faces(model, fr.plastic.rest_positions, m->surface, c, child.parent_tet, tolerance);
-    // Eq. 22: the child keeps the velocity of the parent's material at its centre.
-    child.rigid.orientation = rigid.orientation;
-    child.rigid.position = rigid.position + to_world * c;
-    child.rigid.angular_velocity = rigid.angular_velocity;
-    child.rigid.linear_velocity =
-        rigid.linear_velocity + rigid.angular_velocity.cross(child.rigid.position - rigid.position);
-    child.model = std::move(m);
-    result.children.push_back(std::move(child));
-  }
+  std::vector<std::size_t> kept_fragments;
+  for (std::size_t k = 0; k < fr.fragments.size(); ++k)
+    if (keep[k]) kept_fragments.push_back(k);
+  // Each child's model (faces, surface, FEM rest data, mass properties, crack flags) depends only
+  // on its fragment and the parent: built side by side, each into its own slot, in fragment order.
+  std::vector<ImpactChild> children(kept_fragments.size());
+  parallel_for(
+      0, static_cast<std::int64_t>(children.size()),
+      [&](std::int64_t i) {
+        const Fragment& f = fr.fragments[kept_fragments[static_cast<std::size_t>(i)]];
+        ImpactChild& child = children[static_cast<std::size_t>(i)];
+        const Vec3 c = f.mass.center;
+        auto m = std::make_shared<BodyModel>();
+        m->mesh = f.mesh;
+        for (Vec3& p : m->mesh.positions) p -= c;
+        m->faces = compute_faces(m->mesh);
+        m->surface = boundary_surface(m->mesh, m->faces);
+        // Tets the cut and plasticity left as they were keep the parent's rest data.
+        std::vector<Index> same_rest(f.tet_map.size());
+        for (std::size_t e = 0; e < f.tet_map.size(); ++e) {
+          const Index pt = fr.tet_parent[f.tet_map[e]];
+          bool same = true;
+          for (int corner = 0; corner < 4 && same; ++corner)
+            same = f.mesh.positions[f.mesh.tets[e][corner]] == model.mesh.positions[model.mesh.tets[pt][corner]];
+          same_rest[e] = same ? pt : -1;
+        }
+        m->fem = make_fem_model(m->mesh, child_material, model.fem.model, {.model = &model.fem, .tet = same_rest});
+        m->mass = mass_properties(m->mesh, child_material.density);
+        m->material_origin = model.material_origin + c;
+        child.origin = c;
+        child.parent_tet.resize(f.tet_map.size());
+        child.plastic_strain.resize(f.tet_map.size());
+        for (std::size_t e = 0; e < f.tet_map.size(); ++e) {
+          child.parent_tet[e] = fr.tet_parent[f.tet_map[e]];
+          child.plastic_strain[e] = fr.plastic_strain[f.tet_map[e]];
+        }
+        child.unchanged_parent_tet = std::move(same_rest);
+        if (!strength.empty())
+          for (const Index e : child.parent_tet)
+            child.tensile_strength.push_back(strength[static_cast<std::size_t>(e)]);
+        m->crack_face = child_crack_faces(model, fr.plastic.rest_positions, m->surface, c, child.parent_tet, tolerance);
+        // Eq. 22: the child keeps the velocity of the parent's material at its centre.
+        child.rigid.orientation = rigid.orientation;
+        child.rigid.position = rigid.position + to_world * c;
+        child.rigid.angular_velocity = rigid.angular_velocity;
+        child.rigid.linear_velocity =
+            rigid.linear_velocity + rigid.angular_velocity.cross(child.rigid.position - rigid.position);
+        child.model = std::move(m);
+      },
+      2);
+  for (ImpactChild& child : children) result.children.push_back(std::move(child));
 }
 
 // Steps 3-6 of the analysis (impact.h): hold, solve, stresses, plasticity, cracks, children, for
@@ -369,7 +378,19 @@ Result<void> respond(const BodyModel& model, BodyState& state, const std::vector
 
   // Stresses, then plasticity and cracks only where a limit is passed.
   t0 = Clock::now();
-  std::vector<TetStress> stress = compute_stresses(model.fem, x);
+  // Tets held whole by the far field stay at rest: their stress is zero, not computed.
+  std::vector<TetStress> stress;
+  if (far) {
+    std::vector<char> at_rest(static_cast<std::size_t>(nt), 0);
+    for (Index e = 0; e < nt; ++e) {
+      const TetIndices& t = model.mesh.tets[e];
+      at_rest[e] = problem.anchors[t[0]] == anchor_all && problem.anchors[t[1]] == anchor_all &&
+                   problem.anchors[t[2]] == anchor_all && problem.anchors[t[3]] == anchor_all;
+    }
+    stress = compute_stresses(model.fem, x, at_rest);
+  } else {
+    stress = compute_stresses(model.fem, x);
+  }
   result.display_stress.resize(stress.size());
   result.principal_stress.resize(stress.size());
   for (std::size_t e = 0; e < stress.size(); ++e) {
