@@ -3,11 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 
 #include "fracture_checks.h"
 #include "shatter/core/parallel.h"
 #include "shatter/fem/fem_model.h"
 #include "shatter/fracture/fracture.h"
+#include "shatter/fracture/stress.h"
 #include "shatter/mesh/generate.h"
 #include "support/test_support.h"
 
@@ -123,6 +125,51 @@ TEST(Fracture, DeterministicAcrossRunsAndThreads) {
   set_num_threads(threads);
   EXPECT_EQ(hashes[0], hashes[1]);
   EXPECT_EQ(hashes[1], hashes[2]);
+}
+
+// Tets marked at rest get exactly zero stress; every other tet the bits of the full computation,
+// on one thread and two (the deformed tets are regrouped, four to a vector, differently).
+TEST(Stresses, AtRestTetsAreZeroAndTheOthersKeepTheirBits) {
+  const TetMesh m = make_box_mesh({.max = Vec3(1, 0.5, 0.5), .cells = {16, 8, 8}, .jitter = 0.2, .seed = 5});
+  const FemModel model = make_fem_model(m, material_preset("glass").value(), ModelKind::stvk);
+  // Deformed only for x > 0.5: the tets wholly below stay at their rest positions.
+  std::vector<Vec3> x = wavy(m, 3e-3);
+  std::vector<char> at_rest(m.tets.size(), 0);
+  for (std::size_t i = 0; i < x.size(); ++i)
+    if (m.positions[i].x() <= 0.5) x[i] = m.positions[i];
+  std::size_t resting = 0;
+  for (std::size_t e = 0; e < m.tets.size(); ++e) {
+    bool rest = true;
+    for (const Index v : m.tets[e]) rest = rest && m.positions[v].x() <= 0.5;
+    // Every third resting tet is left unmarked: it is computed, and its round-off kept.
+    at_rest[e] = rest && e % 3 != 0;
+    resting += at_rest[e];
+  }
+  ASSERT_GT(resting, m.tets.size() / 4);
+  const int threads = num_threads();
+  const std::vector<TetStress> full = compute_stresses(model, x);
+  // Computed, most resting tets carry round-off: the mask is seen in the bits.
+  std::size_t round_off = 0;
+  for (std::size_t e = 0; e < full.size(); ++e) round_off += at_rest[e] && full[e].sigma != Mat3::Zero();
+  EXPECT_GT(round_off, resting / 2);
+  for (const int n : {1, 2}) {
+    set_num_threads(n);
+    const std::vector<TetStress> masked = compute_stresses(model, x, at_rest);
+    ASSERT_EQ(masked.size(), full.size());
+    for (std::size_t e = 0; e < full.size(); ++e) {
+      const TetStress& want = at_rest[e] ? TetStress{} : full[e];
+      EXPECT_EQ(std::memcmp(masked[e].sigma.data(), want.sigma.data(), sizeof(Mat3)), 0) << "tet " << e;
+      EXPECT_EQ(std::memcmp(masked[e].principal.data(), want.principal.data(), sizeof(Vec3)), 0) << "tet " << e;
+      EXPECT_EQ(std::memcmp(masked[e].directions.data(), want.directions.data(), sizeof(Mat3)), 0) << "tet " << e;
+      EXPECT_EQ(masked[e].von_mises, want.von_mises);
+      EXPECT_EQ(masked[e].display, want.display);
+      // What a resting tet's computed stress would be: round-off of zero.
+      if (at_rest[e]) {
+        EXPECT_LT(full[e].sigma.norm(), 1e-6 * model.material.youngs_modulus);
+      }
+    }
+  }
+  set_num_threads(threads);
 }
 
 }  // namespace
