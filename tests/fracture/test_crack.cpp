@@ -135,6 +135,33 @@ TEST(PlanCracks, TheFaceTableGivesTheSameRegions) {
     }
 }
 
+// Growing only the first region (PlanRegions::first) gives the same plans; a branching plan's later
+// regions are left empty, a non-branching plan's are grown (its later origins must avoid them).
+TEST(PlanCracks, FirstRegionOnlyKeepsThePlans) {
+  const TetMesh m = make_box_mesh({.max = Vec3(4, 1, 1), .cells = {12, 3, 3}, .jitter = 0.2});
+  const Material mat = test_material(1e6);
+  const auto stress = uniaxial(m, Vec3::UnitX(), [](const Vec3& c) { return 1.5e6 - 0.2e6 * std::abs(c.x() - 1.3); });
+  for (const bool branch : {false, true}) {
+    const CrackOptions options{.brittleness = 4, .radius_fraction = 0.3, .max_cracks = 3, .branch = branch};
+    const std::vector<CrackPlan> all = plan_cracks(m, stress, mat, options);
+    const std::vector<CrackPlan> first =
+        plan_cracks(m, stress, mat, options, {}, {}, nullptr, nullptr, PlanRegions::first);
+    ASSERT_GE(all.size(), 2u);
+    ASSERT_EQ(all.size(), first.size());
+    for (std::size_t k = 0; k < all.size(); ++k) {
+      EXPECT_EQ(all[k].origin_tet, first[k].origin_tet);
+      EXPECT_EQ(all[k].normal, first[k].normal);
+      EXPECT_EQ(all[k].radius, first[k].radius);
+      EXPECT_FALSE(all[k].tets.empty());
+      if (k == 0 || !branch) {
+        EXPECT_EQ(all[k].tets, first[k].tets);
+      } else {
+        EXPECT_TRUE(first[k].tets.empty());
+      }
+    }
+  }
+}
+
 // Neighbours carried through a cut are the cut mesh's own (face_neighbor), for most tets; a region
 // grown in them is the one grown by searching.
 TEST(CrackRegion, NeighborsCarriedThroughACutAreTheCutMeshs) {

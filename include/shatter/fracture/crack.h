@@ -107,11 +107,16 @@ std::vector<Index> crack_region(const TetMesh& mesh, FaceNeighborTable& known, I
 /// and the crack radius follows the origin's own excess. `faces` (compute_faces of `mesh`, or
 /// null), when the caller keeps them, gives the regions' face neighbours without a search;
 /// `neighbors` (or null) receives the neighbours known once the regions are grown (for
-/// carry_face_neighbors; left as it was when nothing is planned).
+/// carry_face_neighbors; left as it was when nothing is planned). With `regions` =
+/// PlanRegions::first, a branching plan (options.branch) grows only the first crack's region and
+/// leaves the later plans' `tets` empty: for callers that grow each later region on the mesh the
+/// earlier cuts leave (fracture_with_stress), where a region on the uncut mesh would go unused.
+/// The plans are the same either way.
+enum class PlanRegions { all, first };
 std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStress>& stress, const Material& material,
                                    const CrackOptions& options = {}, const std::vector<Index>& ductile_origins = {},
                                    const std::vector<double>& tet_strength = {}, const TetFaces* faces = nullptr,
-                                   FaceNeighborTable* neighbors = nullptr);
+                                   FaceNeighborTable* neighbors = nullptr, PlanRegions regions = PlanRegions::all);
 
 /// Exponentially time-averaged stress per tet: sigma_avg += (1 - exp(-dt / tau)) (sigma - sigma_avg).
 /// A stress must persist for about tau to count fully, so a one-step spike does not crack a body

@@ -30,8 +30,9 @@ struct FractureOptions {
   const TetFaces* faces = nullptr;
 };
 
-/// One crack: its plan (origin, normal, radius, region in the mesh it was planned on) and what the
-/// cut did.
+/// One crack: its plan (origin, normal, radius; its `tets`, the region on the uncut mesh, only for
+/// the first crack and for cracks that do not branch: a branch's region is grown on the mesh the
+/// earlier cuts left, and counted in tets_marked) and what the cut did.
 struct CrackEvent {
   CrackPlan plan;              ///< the planned crack
   Index tets_marked = 0;       ///< tets in the crack region when it was cut

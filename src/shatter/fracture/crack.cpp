@@ -190,7 +190,7 @@ std::vector<Index> crack_region(const TetMesh& mesh, FaceNeighborTable& known, I
 std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStress>& stress, const Material& material,
                                    const CrackOptions& options, const std::vector<Index>& ductile_origins,
                                    const std::vector<double>& tet_strength, const TetFaces* faces,
-                                   FaceNeighborTable* neighbors) {
+                                   FaceNeighborTable* neighbors, PlanRegions regions) {
   SHATTER_CHECK(stress.size() == mesh.tets.size());
   SHATTER_CHECK(tet_strength.empty() || tet_strength.size() == mesh.tets.size());
   std::vector<CrackPlan> plans;
@@ -244,8 +244,12 @@ std::vector<CrackPlan> plan_cracks(const TetMesh& mesh, const std::vector<TetStr
     p.stress = tension(e);
     p.radius = r;
     p.ductile = ductile;
-    p.tets = grow_region(mesh, face_neighbors, e, c, r);
-    for (Index t : p.tets) taken[t] = 1;
+    // Without branching, later origins must lie outside every region: each is grown. A branching
+    // plan's regions matter only to the caller.
+    if (plans.empty() || regions == PlanRegions::all || !options.branch) {
+      p.tets = grow_region(mesh, face_neighbors, e, c, r);
+      for (Index t : p.tets) taken[t] = 1;
+    }
     plans.push_back(std::move(p));
   };
   for (Index e : ductile_origins) consider(e, true);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <numeric>
@@ -157,9 +158,16 @@ CutResult split_along_plane(const TetMesh& mesh, const CutPlane& plane, const st
                             const CutOptions& options) {
   const Index nn = mesh.num_nodes();
   const Index nt = mesh.num_tets();
-  std::vector<Index> region = region_in;
-  std::sort(region.begin(), region.end());
-  region.erase(std::unique(region.begin(), region.end()), region.end());
+  // In increasing order without repeats (crack regions come so: then no copy is sorted).
+  const bool ordered =
+      std::adjacent_find(region_in.begin(), region_in.end(), std::greater_equal<Index>()) == region_in.end();
+  std::vector<Index> sorted_region;
+  if (!ordered) {
+    sorted_region = region_in;
+    std::sort(sorted_region.begin(), sorted_region.end());
+    sorted_region.erase(std::unique(sorted_region.begin(), sorted_region.end()), sorted_region.end());
+  }
+  const std::vector<Index>& region = ordered ? region_in : sorted_region;
 
   // Node signs with snapping: |d| <= snap_fraction x shortest incident region edge counts as 0.
   std::vector<double> dist(nn, 0.0);
@@ -176,8 +184,12 @@ CutResult split_along_plane(const TetMesh& mesh, const CutPlane& plane, const st
         h2[t[b]] = std::min(h2[t[b]], l2);
       }
   }
+  // Each node once (h2 is final; a node lies on about twenty region tets).
+  std::vector<char> signed_node(static_cast<std::size_t>(nn), 0);
   for (Index e : region)
     for (Index v : mesh.tets[e]) {
+      if (signed_node[v]) continue;
+      signed_node[v] = 1;
       const double d = plane.normal.dot(mesh.positions[v] - plane.point);
       dist[v] = d;
       sign[v] = std::abs(d) <= options.snap_fraction * std::sqrt(h2[v]) ? 0 : (d > 0 ? 1 : -1);

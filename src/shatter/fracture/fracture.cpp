@@ -34,7 +34,7 @@ FractureResult fracture_with_stress(const TetMesh& rest, const FemModel& model, 
   // (below): each crack's region grows in them, searching only what they do not know.
   FaceNeighborTable known;
   const std::vector<CrackPlan> plans = plan_cracks(r.mesh, r.stress, material, options.crack, r.plastic.failed,
-                                                   options.tensile_strength, options.faces, &known);
+                                                   options.tensile_strength, options.faces, &known, PlanRegions::first);
   for (std::size_t k = 0; k < plans.size(); ++k) {
     CrackEvent ev;
     ev.plan = plans[k];
@@ -42,11 +42,14 @@ FractureResult fracture_with_stress(const TetMesh& rest, const FemModel& model, 
         k == 0 ? plans[k].tets : crack_region(r.mesh, known, plans[k].origin_tet, plans[k].origin, plans[k].radius);
     CutResult cut = cut_mesh(r.mesh, {.point = plans[k].origin, .normal = plans[k].normal}, region, options.cut);
     // Carrying the neighbours costs a pass over the mesh (about 16 ns a tet here); searching them,
-    // about 100 ns per tet of the next region. Carried when the next crack's planned region is
-    // over an eighth of the mesh; the same neighbours either way.
-    if (k + 1 < plans.size())
-      known = plans[k + 1].tets.size() * 8 >= r.mesh.tets.size() ? carry_face_neighbors(r.mesh, known, cut)
-                                                                 : unknown_face_neighbors(cut.mesh.num_tets());
+    // about 100 ns per tet of the next region. Carried when the next crack's region is likely over
+    // an eighth of the mesh: its planned region when planned (without branching), else this
+    // crack's region (branches of one blow have alike radii). The same neighbours either way.
+    if (k + 1 < plans.size()) {
+      const std::size_t next = options.crack.branch ? region.size() : plans[k + 1].tets.size();
+      known = next * 8 >= r.mesh.tets.size() ? carry_face_neighbors(r.mesh, known, cut)
+                                             : unknown_face_neighbors(cut.mesh.num_tets());
+    }
     ev.tets_marked = static_cast<Index>(region.size());
     ev.tets_split = cut.tets_split;
     ev.edge_nodes = cut.edge_nodes;
