@@ -184,6 +184,40 @@ TEST(CrackRegion, NeighborsCarriedThroughACutAreTheCutMeshs) {
     }
   EXPECT_GT(known, 4 * cut.mesh.tets.size() / 2);
   EXPECT_LT(known, 4 * cut.mesh.tets.size());
+  // changed_tets lists exactly the input tets whose corners changed.
+  std::vector<Index> changed;
+  for (Index e = 0; e < m.num_tets(); ++e)
+    if (cut.mesh.tets[e] != m.tets[e]) changed.push_back(e);
+  EXPECT_EQ(cut.changed_tets, changed);
+  EXPECT_GT(changed.size(), static_cast<std::size_t>(cut.tets_split));  // node copies too
+  // The table is the rule of carry_face_neighbors applied to every tet (not only the changed ones).
+  auto kept = [&](Index e) {
+    if (e >= m.num_tets() || cut.tet_parent[e] != e) return false;
+    for (int c = 0; c < 4; ++c) {
+      const NodeOrigin& o = cut.node_origin[cut.mesh.tets[e][c]];
+      if (o.a != o.b || o.a != m.tets[e][c]) return false;
+    }
+    return true;
+  };
+  for (Index e = 0; e < cut.mesh.num_tets(); ++e)
+    for (int k = 0; k < 4; ++k) {
+      Index want = kUnknownNeighbor;
+      if (kept(e)) {
+        const Index n = before[e][k];
+        if (n == -1) {
+          want = -1;
+        } else if (n >= 0 && kept(n)) {
+          bool shares = true;
+          for (int j = 0; j < 3; ++j) {
+            const Index v = cut.mesh.tets[e][kTetFaces[k][j]];
+            const TetIndices& u = cut.mesh.tets[n];
+            shares = shares && (u[0] == v || u[1] == v || u[2] == v || u[3] == v);
+          }
+          if (shares) want = n;
+        }
+      }
+      EXPECT_EQ(carried[e][k], want) << "tet " << e << " face " << k;
+    }
   const Vec3 centre(2.5, 0.5, 0.5);
   const Index origin = cut.mesh.num_tets() - 1;
   EXPECT_EQ(crack_region(cut.mesh, carried, origin, centre, 1.5),

@@ -87,7 +87,9 @@ FaceNeighborTable face_neighbor_table(const TetFaces& faces);
 /// The table of a cut mesh from its input's (`input_known`, #tets of `input`): a tet the cut left as
 /// it was (its index, and its corners or their copies) keeps its boundary faces and each neighbour
 /// that was left as it was too and still shares the face; everything else is unknown. Exact for
-/// meshes whose faces have at most two tets (validate_mesh's condition).
+/// meshes whose faces have at most two tets (validate_mesh's condition). Only the tets in
+/// cut.changed_tets and the entries naming them are looked at again: a pass over the table, not
+/// over the tets' corners.
 FaceNeighborTable carry_face_neighbors(const TetMesh& input, const FaceNeighborTable& input_known,
                                        const CutResult& cut);
 

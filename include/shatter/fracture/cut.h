@@ -52,6 +52,9 @@ struct CutResult {
   Index edge_nodes = 0;                 ///< nodes made on crossed edges
   Index nodes_duplicated = 0;           ///< node copies made to open the crack
   Index faces_cut = 0;                  ///< faces between + and - tets that were disconnected
+  /// Input tets whose corners changed: split (their first piece) or given a node copy; increasing.
+  /// Every other input tet keeps its corners.
+  std::vector<Index> changed_tets;
 };
 
 /// Split the tets of `region` (indices into mesh.tets) that the plane crosses along it, mark the
@@ -63,10 +66,11 @@ CutResult split_along_plane(const TetMesh& mesh, const CutPlane& plane, const st
 
 /// A mesh with faces disconnected (disconnect_faces).
 struct DisconnectResult {
-  TetMesh mesh;                    ///< the input's tets and nodes, plus the node copies (appended)
-  std::vector<Index> node_parent;  ///< input node of each node of `mesh` (#nodes of mesh)
-  Index nodes_duplicated = 0;      ///< node copies made
-  Index faces_cut = 0;             ///< faces disconnected
+  TetMesh mesh;                     ///< the input's tets and nodes, plus the node copies (appended)
+  std::vector<Index> node_parent;   ///< input node of each node of `mesh` (#nodes of mesh)
+  Index nodes_duplicated = 0;       ///< node copies made
+  Index faces_cut = 0;              ///< faces disconnected
+  std::vector<Index> changed_tets;  ///< tets given a node copy, increasing
 };
 /// Disconnect the faces between tets of side +1 and -1 (#tets, others 0): every node on such a face
 /// gets one copy per group of its tets that stay connected through uncut faces around it, so a

@@ -140,35 +140,45 @@ FaceNeighborTable carry_face_neighbors(const TetMesh& input, const FaceNeighborT
                                        const CutResult& cut) {
   SHATTER_CHECK(input_known.size() == input.tets.size());
   const TetMesh& mesh = cut.mesh;
-  FaceNeighborTable table = unknown_face_neighbors(mesh.num_tets());
-  // Left as it was: the same index, each corner the input's or a copy of it.
   const Index n_input = std::min(input.num_tets(), mesh.num_tets());
-  std::vector<char> kept(static_cast<std::size_t>(n_input), 0);
-  for (Index e = 0; e < n_input; ++e) {
+  // Only the tets whose corners changed (cut.changed_tets) and the entries that name them are
+  // looked at again; every other entry stands as it was.
+  FaceNeighborTable table = input_known;
+  table.resize(mesh.tets.size(), {kUnknownNeighbor, kUnknownNeighbor, kUnknownNeighbor, kUnknownNeighbor});
+  // changed: 1 = corners changed but each the input's or a copy of it (kept: its faces are where
+  // they were); 2 = not kept (split, or its index no longer holds its input tet).
+  std::vector<char> changed(static_cast<std::size_t>(n_input), 0);
+  for (const Index e : cut.changed_tets) {
+    if (e >= n_input) continue;
     bool same = cut.tet_parent[e] == e;
     for (int c = 0; c < 4 && same; ++c) {
       const NodeOrigin& o = cut.node_origin[mesh.tets[e][c]];
       same = o.a == o.b && o.a == input.tets[e][c];
     }
-    kept[e] = same ? 1 : 0;
+    changed[e] = same ? 1 : 2;
   }
   for (Index e = 0; e < n_input; ++e) {
-    if (!kept[e]) continue;
-    const TetIndices& t = mesh.tets[e];
+    const char ce = changed[e];
     for (int k = 0; k < 4; ++k) {
       const Index n = input_known[e][k];
+      const bool names_changed = n >= 0 && n < n_input && changed[n];
+      if (!ce && !names_changed) continue;
+      Index& entry = table[e][k];
+      entry = kUnknownNeighbor;
+      if (ce == 2) continue;
       if (n == -1) {
-        table[e][k] = -1;  // a cut opens faces, it never closes one
+        entry = -1;  // a cut opens faces, it never closes one
         continue;
       }
-      if (n < 0 || n >= n_input || !kept[n]) continue;
+      if (n < 0 || n >= n_input || changed[n] == 2) continue;
+      const TetIndices& t = mesh.tets[e];
       const TetIndices& u = mesh.tets[n];
       bool shares = true;
       for (int j = 0; j < 3 && shares; ++j) {
         const Index v = t[kTetFaces[k][j]];
         shares = u[0] == v || u[1] == v || u[2] == v || u[3] == v;
       }
-      if (shares) table[e][k] = n;
+      if (shares) entry = n;
     }
   }
   return table;

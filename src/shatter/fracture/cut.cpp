@@ -330,6 +330,7 @@ CutResult split_along_plane(const TetMesh& mesh, const CutPlane& plane, const st
     const Index e = cand[c];
     if (!in_s[e]) continue;
     ++r.tets_split;
+    r.changed_tets.push_back(e);
     for (Index p = piece_begin[c]; p < piece_begin[c + 1]; ++p) {
       TetIndices t = pieces[p].t;
       for (Index& v : t) v = remap(v);
@@ -418,6 +419,7 @@ DisconnectResult disconnect_faces(const TetMesh& mesh, const std::vector<std::in
     cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
 
     r.mesh = mesh;
+    r.changed_tets.clear();
     r.node_parent.resize(nn);
     std::iota(r.node_parent.begin(), r.node_parent.end(), Index(0));
     std::vector<Edge> sources;
@@ -477,11 +479,15 @@ DisconnectResult disconnect_faces(const TetMesh& mesh, const std::vector<std::in
           }
         }
         const Index c = copy_of_root[root];
-        if (c != v)
+        if (c != v) {
           for (Index& w : r.mesh.tets[ts[i]])
             if (w == v) w = c;
+          r.changed_tets.push_back(ts[i]);
+        }
       }
     }
+    std::sort(r.changed_tets.begin(), r.changed_tets.end());
+    r.changed_tets.erase(std::unique(r.changed_tets.begin(), r.changed_tets.end()), r.changed_tets.end());
     append_node_attributes(r.mesh, mesh, sources);
     r.nodes_duplicated = static_cast<Index>(sources.size());
     r.faces_cut = static_cast<Index>(active.size());
@@ -561,6 +567,11 @@ CutResult cut_mesh(const TetMesh& mesh, const CutPlane& plane, const std::vector
   r.edge_nodes = split.edge_nodes;
   r.nodes_duplicated = d.nodes_duplicated;
   r.faces_cut = d.faces_cut;
+  // Both lists are increasing: merged without repeats, the input's tets only (a split's pieces
+  // past them may have taken node copies too).
+  const auto input_end = std::lower_bound(d.changed_tets.begin(), d.changed_tets.end(), mesh.num_tets());
+  std::set_union(split.changed_tets.begin(), split.changed_tets.end(), d.changed_tets.begin(), input_end,
+                 std::back_inserter(r.changed_tets));
   return r;
 }
 
