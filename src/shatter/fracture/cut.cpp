@@ -2,13 +2,14 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <iterator>
 #include <limits>
 #include <numeric>
 #include <span>
-#include <tuple>
 
 #include "shatter/core/assert.h"
 #include "shatter/mesh/topology.h"
@@ -424,12 +425,13 @@ DisconnectResult disconnect_faces(const TetMesh& mesh, const std::vector<std::in
     std::iota(r.node_parent.begin(), r.node_parent.end(), Index(0));
     std::vector<Edge> sources;
     std::vector<Index> parent;  // local union-find over the node's tets
-    struct Through {            // a face through the node: its two other nodes (a < b), tet i, face k
-      Index a, b, i;
-      int k;
-      bool operator<(const Through& o) const { return std::tie(a, b, i, k) < std::tie(o.a, o.b, o.i, o.k); }
-    };
-    std::vector<Through> through;
+    // The faces through a node, keyed by their two other nodes (a < b) as ((a + 1) << 32) | (b + 1)
+    // (0: an empty slot), in an open-addressing table of a power-of-two size, with the last face
+    // of each key seen so far, as (tet i << 2) | face k. Cleared slot by slot after each node.
+    std::vector<std::uint64_t> slot_key;
+    std::vector<std::int64_t> slot_last;
+    std::vector<std::size_t> used_slots;
+    std::vector<Index> copy_of_root;
     for (Index v : cand) {
       const auto ts = nt_of.of(v);
       const Index n = static_cast<Index>(ts.size());
@@ -439,9 +441,17 @@ DisconnectResult disconnect_faces(const TetMesh& mesh, const std::vector<std::in
         while (parent[i] != i) i = parent[i] = parent[parent[i]];
         return i;
       };
-      // Two tets of v share a face through v when they share its other two nodes: sort the faces
-      // through v (three per tet; face k is opposite corner k) by those and pair equal neighbours.
-      through.clear();
+      // Two tets of v share a face through v when they share its other two nodes. The faces through
+      // v (three per tet; face k is opposite corner k), in (tet, face) order: each is paired with
+      // the last earlier face of the same two nodes (a face of a valid mesh has one such).
+      std::size_t size = 16;
+      while (size < 6 * static_cast<std::size_t>(n)) size *= 2;
+      if (slot_key.size() < size) {
+        slot_key.assign(size, 0);
+        slot_last.resize(size);
+      }
+      const std::size_t mask = slot_key.size() - 1;
+      const int shift = 64 - std::countr_zero(slot_key.size());
       for (Index i = 0; i < n; ++i) {
         const TetIndices& t = mesh.tets[ts[i]];
         for (int k = 0; k < 4; ++k) {
@@ -450,22 +460,31 @@ DisconnectResult disconnect_faces(const TetMesh& mesh, const std::vector<std::in
           int no = 0;
           for (int c = 0; c < 4; ++c)
             if (c != k && t[c] != v) others[no++] = t[c];
-          through.push_back({std::min(others[0], others[1]), std::max(others[0], others[1]), i, k});
+          const std::uint64_t key = (static_cast<std::uint64_t>(std::min(others[0], others[1]) + 1) << 32) |
+                                    static_cast<std::uint64_t>(std::max(others[0], others[1]) + 1);
+          std::size_t h = static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ULL) >> shift) & mask;
+          while (slot_key[h] != 0 && slot_key[h] != key) h = (h + 1) & mask;
+          const std::int64_t here = (static_cast<std::int64_t>(i) << 2) | k;
+          if (slot_key[h] == 0) {
+            slot_key[h] = key;
+            used_slots.push_back(h);
+          } else {
+            const auto earlier = static_cast<Index>(slot_last[h] >> 2);
+            const int earlier_face = static_cast<int>(slot_last[h] & 3);
+            // Roots are the lowest member of their group whatever the order of unions, so the
+            // groups and the copies below do not depend on it.
+            if (!is_cut(ts[earlier], earlier_face, ts[i])) {
+              const Index a = find(earlier), b = find(i);
+              if (a != b) parent[std::max(a, b)] = std::min(a, b);
+            }
+          }
+          slot_last[h] = here;
         }
       }
-      std::sort(through.begin(), through.end());
-      for (std::size_t f = 0; f + 1 < through.size(); ++f) {
-        const Through& x = through[f];
-        const Through& y = through[f + 1];
-        if (x.a != y.a || x.b != y.b) continue;
-        // Roots are the lowest member of their group whatever the order of unions, so the groups
-        // and the copies below do not depend on it.
-        if (is_cut(ts[x.i], x.k, ts[y.i])) continue;
-        const Index a = find(x.i), b = find(y.i);
-        if (a != b) parent[std::max(a, b)] = std::min(a, b);
-      }
+      for (const std::size_t h : used_slots) slot_key[h] = 0;
+      used_slots.clear();
       // Group of the lowest tet keeps v; each further group (by lowest tet) gets a new copy.
-      std::vector<Index> copy_of_root(n, -1);
+      copy_of_root.assign(static_cast<std::size_t>(n), -1);
       for (Index i = 0; i < n; ++i) {
         const Index root = find(i);
         if (copy_of_root[root] < 0) {
