@@ -38,6 +38,13 @@ void analyze_range(std::span<const Mat3> sigma, std::span<TetStress> out) {
   }
 }
 
+// The Cauchy stress of tet t of `model` at the deformed positions, Pa.
+Mat3 tet_cauchy_stress(const FemModel& model, const std::vector<Vec3>& deformed, std::size_t t) {
+  Mat34 x;
+  for (int c = 0; c < 4; ++c) x.col(c) = deformed[static_cast<std::size_t>(model.tets[t][c])];
+  return cauchy_stress(model.model, model.lame, deformation_gradient(model.rest[t], x));
+}
+
 }  // namespace
 
 TetStress analyze_stress(const Mat3& sigma) { return finish_stress(sigma, principal_stresses(sigma)); }
@@ -54,9 +61,7 @@ std::vector<TetStress> compute_stresses(const FemModel& model, const std::vector
         std::array<Mat3, kGroup> sigma;
         for (std::size_t k = 0; k < n; ++k) {
           const std::size_t t = first + k;
-          Mat34 x;
-          for (int c = 0; c < 4; ++c) x.col(c) = deformed[static_cast<std::size_t>(model.tets[t][c])];
-          sigma[k] = cauchy_stress(model.model, model.lame, deformation_gradient(model.rest[t], x));
+          sigma[k] = tet_cauchy_stress(model, deformed, t);
         }
         analyze_range(std::span(sigma.data(), n), std::span(out).subspan(first, n));
       },
@@ -82,9 +87,7 @@ std::vector<TetStress> compute_stresses(const FemModel& model, const std::vector
         std::array<TetStress, kGroup> analysed;
         for (std::size_t k = 0; k < n; ++k) {
           const auto t = static_cast<std::size_t>(active[first + k]);
-          Mat34 x;
-          for (int c = 0; c < 4; ++c) x.col(c) = deformed[static_cast<std::size_t>(model.tets[t][c])];
-          sigma[k] = cauchy_stress(model.model, model.lame, deformation_gradient(model.rest[t], x));
+          sigma[k] = tet_cauchy_stress(model, deformed, t);
         }
         analyze_range(std::span(sigma.data(), n), std::span(analysed.data(), n));
         for (std::size_t k = 0; k < n; ++k) out[static_cast<std::size_t>(active[first + k])] = analysed[k];
