@@ -244,14 +244,22 @@ TEST(World, FastThinShardDoesNotTunnel) {
   }
 }
 
-std::uint64_t pile_hash(int threads, int steps, int restore_at) {
+// 40 pieces dropped into a pile beside a kinematic paddle that sweeps through it (joining the
+// islands it touches), on `threads` threads, solved in groups of `group_bodies` moving bodies.
+std::uint64_t pile_hash(int threads, int steps, int restore_at, std::int64_t group_bodies = 1) {
   const int saved_threads = num_threads();
   set_num_threads(threads);
   WorldSettings settings = scenes::settings(true);
   settings.parallel_min_pairs = 1;  // every parallel loop runs parallel even in this small pile
   settings.parallel_min_bodies = 1;
+  settings.solve_group_bodies = group_bodies;
   World w(settings);
   add_ground(w);
+  BodyDef paddle;
+  paddle.type = BodyType::kinematic;
+  paddle.rigid.position = Vec3(-0.6, 0.05, 0);
+  paddle.rigid.linear_velocity = Vec3(0.4, 0, 0);
+  (void)*w.add_box(Vec3(0.02, 0.05, 0.3), paddle);
   const auto pieces = scenes::random_pieces(40, 0.03, 0.12, 60, 7);
   Random rng(11);
   for (std::size_t i = 0; i < pieces.size(); ++i) {
@@ -261,9 +269,14 @@ std::uint64_t pile_hash(int threads, int steps, int restore_at) {
     (void)*w.add_body(pieces[i], def);
   }
   WorldSnapshot snap;
+  std::int64_t most_groups = 0;
   for (int i = 0; i < steps; ++i) {
     if (i == restore_at) snap = w.save();
     w.step();
+    most_groups = std::max(most_groups, w.stats().solve_groups);
+  }
+  if (group_bodies == 1) {
+    EXPECT_GT(most_groups, 10);  // the islands were solved apart
   }
   if (restore_at >= 0) {
     const std::uint64_t straight = w.state_hash();
@@ -282,6 +295,17 @@ TEST(World, StateHashIsTheSameAcrossRunsThreadCountsAndRestore) {
   EXPECT_EQ(pile_hash(2, steps, -1), h1);
   EXPECT_EQ(pile_hash(4, steps, -1), h1);
   EXPECT_EQ(pile_hash(2, steps, 70), h1);
+}
+
+// Islands solved in groups side by side (WorldSettings::solve_group_bodies) give the bits of one
+// solve over every body.
+TEST(World, SolvingIslandsInGroupsKeepsTheBits) {
+  const int steps = 150;
+  const std::uint64_t one_group = pile_hash(1, steps, -1, std::int64_t{1} << 40);
+  EXPECT_EQ(pile_hash(1, steps, -1, 1), one_group);
+  EXPECT_EQ(pile_hash(2, steps, -1, 1), one_group);
+  EXPECT_EQ(pile_hash(2, steps, -1, 5), one_group);
+  EXPECT_EQ(pile_hash(4, steps, -1, 1), one_group);
 }
 
 TEST(World, StateHashIsTheSameWithEitherInstructionSet) {

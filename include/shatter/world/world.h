@@ -132,6 +132,10 @@ struct WorldSettings {
   /// Results do not depend on them (nor on the thread count).
   std::int64_t parallel_min_pairs = 512;
   std::int64_t parallel_min_bodies = 2048;
+  /// The contact solve steps groups of islands (bodies joined by contacts) through all substeps
+  /// side by side, a group on one thread: groups of at least this many moving bodies, an island
+  /// never split. Results do not depend on it.
+  std::int64_t solve_group_bodies = 64;
   /// Impact events (docs/impacts.md): a pair of bodies whose contacts first carry an impulse at an
   /// approach speed of at least impact.min_approach_speed opens an event, which stays open until
   /// the pair no longer touches. Each breakable body of a new event is analysed once
@@ -251,7 +255,8 @@ struct StepStats {
   std::int64_t contacts = 0;      ///< manifolds solved
   std::int64_t contact_points = 0;
   std::int64_t islands = 0;
-  double broad_phase_ms = 0;  ///< wall time of each part
+  std::int64_t solve_groups = 0;  ///< groups of islands the contact solve stepped side by side
+  double broad_phase_ms = 0;      ///< wall time of each part
   double narrow_phase_ms = 0;
   double solver_ms = 0;
   double impact_ms = 0;                           ///< impact analyses and body replacement
@@ -566,10 +571,25 @@ class World {
   std::vector<PairRef> pairs_;
   std::vector<std::vector<Contact>> pair_contacts_;
   std::vector<std::array<std::size_t, 2>> old_ranges_;  ///< per pair: its contacts_ of the last step
-  std::vector<char> pair_reused_;       ///< per pair of the narrow phase: its contacts moved, not found afresh
+  /// per pair of the narrow phase: 1 its contacts kept and moved, not found afresh; 2 none gathered
+  std::vector<char> pair_reused_;
+  std::vector<std::size_t> pair_offsets_;  ///< per pair: where its contacts go in next_contacts_
+  /// The contacts of one pair found in an earlier step, moved with the bodies into `out`.
+  void move_kept_contacts(std::span<const Contact> old, Contact* out) const;
   std::vector<Contact> next_contacts_;  ///< the narrow phase's output buffer (swapped with contacts_)
   std::vector<SolverBody> solver_bodies_;
-  ContactBatches contact_batches_;
+  /// Moving bodies joined by their constraints (islands, with the moving kinematic bodies they
+  /// touch), packed in body order into groups that World::solve steps through all substeps at once.
+  struct SolveGroup {
+    std::vector<Index> moving;                    ///< awake non-static bodies, by slot
+    std::vector<ContactConstraint*> constraints;  ///< in the order of contacts_
+    ContactBatches batches;
+  };
+  std::vector<SolveGroup> solve_groups_;  ///< the first solve_group_count_ are this step's
+  std::size_t solve_group_count_ = 0;
+  std::vector<Index> solve_parent_;
+  void build_solve_groups(std::span<ContactConstraint* const> active, std::span<const Index> moving);
+  void solve_group(SolveGroup& group, double h, double inverse_h);
   std::vector<Index> island_parent_;
   std::vector<Index> island_of_;
 };

@@ -642,31 +642,7 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
           const double moved = relative_motion(first_old->origin, offset, rotation, a.is_plane ? -1 : a.radius,
                                                b.is_plane ? -1 : b.radius);
           if (moved <= reuse && spec + moved <= first_old->origin.margin) {
-            for (auto it = first_old; it != old_end; ++it) {
-              // A copy of the last step's contact (its pieces, separating-axis cache, origin and
-              // impulses), moved with the bodies; the step's totals start again from zero, as a
-              // new contact's would (prepare_contact sets the rest).
-              Contact& c = out.emplace_back(*it);
-              ContactConstraint& cc = c.constraint;
-              const ContactOrigin& o = it->origin;
-              cc.normal = ta.rotation * o.normal_a;
-              // Warm start from its own impulses (as the gather below does for contacts found afresh).
-              cc.tangents = tangent_basis(cc.normal);
-              carry_friction(cc, it->constraint);
-              cc.total_friction_impulse.setZero();
-              cc.total_twist_impulse = 0;
-              for (int i = 0; i < cc.count; ++i) {
-                ContactPoint& p = cc.points[i];
-                const Vec3 on_a = ta.apply(o.point_a[i]);
-                const Vec3 on_b = tb.apply(o.point_b[i]);
-                p.position = 0.5 * (on_a + on_b);
-                p.separation = cc.normal.dot(on_b - on_a);
-                p.approach_speed = 0;
-                p.max_normal_impulse = 0;
-                p.total_normal_impulse = 0;
-              }
-            }
-            pair_reused_[k] = 1;
+            pair_reused_[k] = 1;  // moved into place by the gather (move_kept_contacts)
             return;
           }
         }
@@ -759,56 +735,100 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
       settings_.parallel_min_pairs);
 
   // Gather in pair order, carry the impulses of matching features (warm start), and settle the
-  // pairs waiting to come apart.
-  // Into the buffer of the step before last: the contacts are about a kilobyte each, and a fresh
+  // pairs waiting to come apart: first where each pair's contacts go, then each pair's into place.
+  // Into the buffer of the step before last: the contacts are about two kilobytes each, and a fresh
   // vector every step went through the allocator's mmap path (page faults) for large scenes.
   std::vector<Contact>& next = next_contacts_;
-  next.clear();
   std::vector<std::array<Index, 2>> still_together;
+  pair_offsets_.resize(pairs.size() + 1);
+  std::size_t total = 0;
   for (std::size_t k = 0; k < pairs.size(); ++k) {
-    std::vector<Contact>& found = pair_contacts_[k];
+    pair_offsets_[k] = total;
+    const std::vector<Contact>& found = pair_contacts_[k];
     if (contains_pair(until_apart_, pairs[k].a, pairs[k].b)) {
       // Both asleep, nothing moved: they are as together as they were. (Their contacts are never
       // kept, so the narrow phase had none to carry over, and they would have counted as apart:
       // woken, pieces still overlapping along their crack would then be pushed apart at speed.)
       const bool asleep = !bodies_[pairs[k].a].awake && !bodies_[pairs[k].b].awake;
       if (!found.empty() || asleep) still_together.push_back({pairs[k].a, pairs[k].b});
+      pair_reused_[k] = 2;  // gathers nothing
       continue;
     }
-    if (pair_reused_[k]) {  // warm-started already
-      for (Contact& c : found) next.push_back(std::move(c));
-      continue;
-    }
-    const auto pair_old = old.begin() + static_cast<std::ptrdiff_t>(old_ranges_[k][0]);
-    const auto pair_old_end = old.begin() + static_cast<std::ptrdiff_t>(old_ranges_[k][1]);
-    for (Contact& c : found) {
-      const auto [lo, hi] = std::equal_range(pair_old, pair_old_end, c, key_less);
-      ContactConstraint& cc = c.constraint;
-      cc.tangents = tangent_basis(cc.normal);
-      bool manifold_matched = false;
-      for (int i = 0; i < cc.count; ++i) {
-        ContactPoint& p = cc.points[i];
-        for (auto it = lo; it != hi; ++it) {
-          const ContactConstraint& oc = it->constraint;
-          const auto match = std::find_if(oc.points.begin(), oc.points.begin() + oc.count,
-                                          [&](const ContactPoint& q) { return q.feature == p.feature; });
-          if (match == oc.points.begin() + oc.count) continue;
-          // Same feature pair: keep its normal impulse; the manifold's friction and twist carry
-          // over when it is the same manifold (re-expressed in the new tangents).
-          p.normal_impulse = match->normal_impulse;
-          if (!manifold_matched) {
-            manifold_matched = true;
-            carry_friction(cc, oc);
-          }
-          break;
-        }
-      }
-      next.push_back(std::move(c));
-    }
+    total += pair_reused_[k] == 1 ? old_ranges_[k][1] - old_ranges_[k][0] : found.size();
   }
+  pair_offsets_[pairs.size()] = total;
+  next.resize(total);
+  parallel_for(
+      0, static_cast<std::int64_t>(pairs.size()),
+      [&](std::int64_t k) {
+        if (pair_reused_[k] == 2) return;
+        Contact* out = next.data() + pair_offsets_[k];
+        const auto pair_old = old.begin() + static_cast<std::ptrdiff_t>(old_ranges_[k][0]);
+        const auto pair_old_end = old.begin() + static_cast<std::ptrdiff_t>(old_ranges_[k][1]);
+        if (pair_reused_[k] == 1) {
+          move_kept_contacts(std::span(pair_old, pair_old_end), out);
+          return;
+        }
+        for (Contact& c : pair_contacts_[k]) {
+          const auto [lo, hi] = std::equal_range(pair_old, pair_old_end, c, key_less);
+          ContactConstraint& cc = c.constraint;
+          cc.tangents = tangent_basis(cc.normal);
+          bool manifold_matched = false;
+          for (int i = 0; i < cc.count; ++i) {
+            ContactPoint& p = cc.points[i];
+            for (auto it = lo; it != hi; ++it) {
+              const ContactConstraint& oc = it->constraint;
+              const auto match = std::find_if(oc.points.begin(), oc.points.begin() + oc.count,
+                                              [&](const ContactPoint& q) { return q.feature == p.feature; });
+              if (match == oc.points.begin() + oc.count) continue;
+              // Same feature pair: keep its normal impulse; the manifold's friction and twist carry
+              // over when it is the same manifold (re-expressed in the new tangents).
+              p.normal_impulse = match->normal_impulse;
+              if (!manifold_matched) {
+                manifold_matched = true;
+                carry_friction(cc, oc);
+              }
+              break;
+            }
+          }
+          *out++ = std::move(c);
+        }
+      },
+      settings_.parallel_min_pairs);
   until_apart_ = std::move(still_together);
   contacts_.swap(next);
   stats_.reused_pairs = std::count(pair_reused_.begin(), pair_reused_.end(), char{1});
+}
+
+void World::move_kept_contacts(std::span<const Contact> old, Contact* out) const {
+  const Body& a = bodies_[old.front().body_a];
+  const Body& b = bodies_[old.front().body_b];
+  const Transform ta = transform_of(a.rigid);
+  const Transform tb = transform_of(b.rigid);
+  for (const Contact& kept : old) {
+    // A copy of the last step's contact (its pieces, separating-axis cache, origin and impulses),
+    // moved with the bodies; the step's totals start again from zero, as a new contact's would
+    // (prepare_contact sets the rest).
+    Contact& c = *out++ = kept;
+    ContactConstraint& cc = c.constraint;
+    const ContactOrigin& o = kept.origin;
+    cc.normal = ta.rotation * o.normal_a;
+    // Warm start from its own impulses (as the gather does for contacts found afresh).
+    cc.tangents = tangent_basis(cc.normal);
+    carry_friction(cc, kept.constraint);
+    cc.total_friction_impulse.setZero();
+    cc.total_twist_impulse = 0;
+    for (int i = 0; i < cc.count; ++i) {
+      ContactPoint& p = cc.points[i];
+      const Vec3 on_a = ta.apply(o.point_a[i]);
+      const Vec3 on_b = tb.apply(o.point_b[i]);
+      p.position = 0.5 * (on_a + on_b);
+      p.separation = cc.normal.dot(on_b - on_a);
+      p.approach_speed = 0;
+      p.max_normal_impulse = 0;
+      p.total_normal_impulse = 0;
+    }
+  }
 }
 
 void World::update_islands_and_wake() {
@@ -846,25 +866,26 @@ void World::solve() {
   const Index n = body_count();
   const double h = settings_.time_step / settings_.substeps;
   const double inverse_h = 1.0 / h;
-  // Box3D's choices: the spring at most an eighth of the substep rate; contacts with static and
-  // kinematic bodies twice as stiff and half as damped, so nothing is pushed into the ground.
-  const double hertz = std::min(settings_.contact.contact_hertz, 0.125 / h);
-  const Softness soft = make_softness(hertz, settings_.contact.damping_ratio, h);
-  const Softness static_soft = make_softness(2 * hertz, 0.5 * settings_.contact.damping_ratio, h);
 
+  // The bodies that do not move (static, asleep) are read by the constraints and never written;
+  // each group sets up its own moving bodies (solve_group).
   solver_bodies_.resize(n);
+  std::vector<Index> moving;
   for (Index i = 0; i < n; ++i) {
     const Body& b = bodies_[i];
+    if (b.awake && b.type != BodyType::static_body) {
+      moving.push_back(i);
+      continue;
+    }
     SolverBody& s = solver_bodies_[i];
-    const bool moves = b.awake && b.type != BodyType::static_body;
-    s.linear_velocity = moves ? b.rigid.linear_velocity : Vec3::Zero();
-    s.angular_velocity = moves ? b.rigid.angular_velocity : Vec3::Zero();
-    const bool responds = moves && b.type == BodyType::dynamic;
-    s.inverse_mass = responds ? b.inertia.inverse_mass : 0.0;
-    s.inverse_inertia = responds ? world_inverse_inertia(b.inertia, b.rigid.orientation) : Mat3::Zero();
+    s.linear_velocity.setZero();
+    s.angular_velocity.setZero();
+    s.inverse_mass = 0;
+    s.inverse_inertia.setZero();
     s.position = b.rigid.position;
     s.rotation = b.rigid.orientation.toRotationMatrix();
   }
+  stats_.awake_bodies = static_cast<std::int64_t>(moving.size());
 
   // Active constraints: those touching an awake dynamic body.
   std::vector<ContactConstraint*> active;
@@ -874,14 +895,92 @@ void World::solve() {
     const Body& b = bodies_[c.body_b];
     const bool live = (a.type == BodyType::dynamic && a.awake) || (b.type == BodyType::dynamic && b.awake);
     if (!live) continue;
-    ContactConstraint& cc = c.constraint;
-    cc.body_a = c.body_a;
-    cc.body_b = c.body_b;
+    c.constraint.body_a = c.body_a;
+    c.constraint.body_b = c.body_b;
+    active.push_back(&c.constraint);
+    stats_.contact_points += c.constraint.count;
+  }
+  stats_.contacts = static_cast<std::int64_t>(active.size());
+
+  build_solve_groups(active, moving);
+  const auto groups = static_cast<std::int64_t>(solve_group_count_);
+  stats_.solve_groups = groups;
+  // Each group's constraints touch only its own moving bodies (the others they touch are static or
+  // asleep, read and never written), so the groups step side by side. A body sees the same
+  // constraints in the same order as in one solve over all of them: the bits do not depend on
+  // the grouping, nor on the thread count.
+  std::int64_t largest = 0;
+  for (std::int64_t g = 0; g < groups; ++g)
+    largest = std::max<std::int64_t>(largest, static_cast<std::int64_t>(solve_groups_[g].moving.size()));
+  if (groups > 1 && 2 * largest <= stats_.awake_bodies)
+    parallel_for(0, groups, [&](std::int64_t g) { solve_group(solve_groups_[g], h, inverse_h); }, 2);
+  else
+    for (std::int64_t g = 0; g < groups; ++g) solve_group(solve_groups_[g], h, inverse_h);  // loops inside in parallel
+}
+
+void World::build_solve_groups(std::span<ContactConstraint* const> active, std::span<const Index> moving) {
+  const Index n = body_count();
+  solve_parent_.resize(n);
+  std::iota(solve_parent_.begin(), solve_parent_.end(), 0);
+  auto moves = [&](Index i) { return bodies_[i].awake && bodies_[i].type != BodyType::static_body; };
+  for (const ContactConstraint* c : active)
+    if (moves(c->body_a) && moves(c->body_b)) unite(solve_parent_, c->body_a, c->body_b);
+  // Components numbered in the order of their first body; consecutive components fill a group up
+  // to solve_group_bodies moving bodies.
+  std::vector<Index> group_of_root(n, -1);
+  std::size_t count = 0;
+  std::int64_t filled = 0;
+  auto open_group = [&] {
+    if (solve_groups_.size() <= count) solve_groups_.emplace_back();
+    solve_groups_[count].moving.clear();
+    solve_groups_[count].constraints.clear();
+    ++count;
+    filled = 0;
+  };
+  for (const Index i : moving) {
+    const Index root = find_root(solve_parent_, i);
+    if (group_of_root[root] < 0) {
+      if (count == 0 || filled >= settings_.solve_group_bodies) open_group();
+      group_of_root[root] = static_cast<Index>(count - 1);
+    }
+    solve_groups_[group_of_root[root]].moving.push_back(i);
+    ++filled;
+  }
+  solve_group_count_ = count;
+  for (ContactConstraint* c : active) {
+    // A live constraint has an awake dynamic body (solve), which moves.
+    const Index body = moves(c->body_a) ? c->body_a : c->body_b;
+    solve_groups_[group_of_root[find_root(solve_parent_, body)]].constraints.push_back(c);
+  }
+}
+
+void World::solve_group(SolveGroup& group, double h, double inverse_h) {
+  const std::vector<Index>& moving = group.moving;
+  for (const Index i : moving) {
+    const Body& b = bodies_[i];
+    SolverBody& s = solver_bodies_[i];
+    s.linear_velocity = b.rigid.linear_velocity;
+    s.angular_velocity = b.rigid.angular_velocity;
+    const bool responds = b.type == BodyType::dynamic;
+    s.inverse_mass = responds ? b.inertia.inverse_mass : 0.0;
+    s.inverse_inertia = responds ? world_inverse_inertia(b.inertia, b.rigid.orientation) : Mat3::Zero();
+    s.position = b.rigid.position;
+    s.rotation = b.rigid.orientation.toRotationMatrix();
+  }
+  // Box3D's choices: the spring at most an eighth of the substep rate; contacts with static and
+  // kinematic bodies twice as stiff and half as damped, so nothing is pushed into the ground.
+  const double hertz = std::min(settings_.contact.contact_hertz, 0.125 / h);
+  const Softness soft = make_softness(hertz, settings_.contact.damping_ratio, h);
+  const Softness static_soft = make_softness(2 * hertz, 0.5 * settings_.contact.damping_ratio, h);
+  for (ContactConstraint* c : group.constraints) {
+    ContactConstraint& cc = *c;
+    const Body& a = bodies_[cc.body_a];
+    const Body& b = bodies_[cc.body_b];
     cc.friction = std::sqrt(a.surface.friction * b.surface.friction);
     cc.restitution = std::max(a.surface.restitution, b.surface.restitution);
     cc.softness = (a.type == BodyType::dynamic && b.type == BodyType::dynamic) ? soft : static_soft;
-    const SolverBody& sa = solver_bodies_[c.body_a];
-    const SolverBody& sb = solver_bodies_[c.body_b];
+    const SolverBody& sa = solver_bodies_[cc.body_a];
+    const SolverBody& sb = solver_bodies_[cc.body_b];
     for (int i = 0; i < cc.count; ++i) {
       ContactPoint& p = cc.points[i];
       p.anchor_a = p.position - sa.position;
@@ -890,18 +989,12 @@ void World::solve() {
       p.local_anchor_b = sb.rotation.transpose() * p.anchor_b;
     }
     prepare_contact(cc, solver_bodies_, settings_.speculative_distance);
-    active.push_back(&cc);
-    stats_.contact_points += cc.count;
   }
-  stats_.contacts = static_cast<std::int64_t>(active.size());
 
-  std::vector<Index> moving;
-  for (Index i = 0; i < n; ++i)
-    if (bodies_[i].awake && bodies_[i].type != BodyType::static_body) moving.push_back(i);
-  stats_.awake_bodies = static_cast<std::int64_t>(moving.size());
   const Vec3 dv_gravity = h * settings_.gravity;
   // Four constraints at a time, in an order that depends only on the constraints' (contact_batches.h).
-  contact_batches_.build(active, solver_bodies_);
+  ContactBatches& batches = group.batches;
+  batches.build(group.constraints, solver_bodies_);
   const auto num_moving = static_cast<std::int64_t>(moving.size());
 
   for (int sub = 0; sub < settings_.substeps; ++sub) {
@@ -912,9 +1005,9 @@ void World::solve() {
           if (bodies_[i].type == BodyType::dynamic) solver_bodies_[i].linear_velocity += dv_gravity;
         },
         settings_.parallel_min_bodies);
-    contact_batches_.measure_approach(solver_bodies_);
-    contact_batches_.warm_start(solver_bodies_);
-    contact_batches_.solve(solver_bodies_, inverse_h, true, settings_.contact.max_push_velocity);
+    batches.measure_approach(solver_bodies_);
+    batches.warm_start(solver_bodies_);
+    batches.solve(solver_bodies_, inverse_h, true, settings_.contact.max_push_velocity);
     // Drift in groups of four bodies (integrate_positions: side by side in vector lanes).
     parallel_for(
         0, (num_moving + 3) / 4,
@@ -943,10 +1036,11 @@ void World::solve() {
           }
         },
         (settings_.parallel_min_bodies + 3) / 4);  // groups: the same threshold in bodies
-    contact_batches_.solve(solver_bodies_, inverse_h, false, settings_.contact.max_push_velocity);
+    batches.solve(solver_bodies_, inverse_h, false, settings_.contact.max_push_velocity);
   }
-  contact_batches_.store();
-  for (ContactConstraint* c : active) apply_restitution(*c, solver_bodies_, settings_.contact.restitution_threshold);
+  batches.store();
+  for (ContactConstraint* c : group.constraints)
+    apply_restitution(*c, solver_bodies_, settings_.contact.restitution_threshold);
   for (const Index i : moving) {
     bodies_[i].rigid.linear_velocity = solver_bodies_[i].linear_velocity;
     bodies_[i].rigid.angular_velocity = solver_bodies_[i].angular_velocity;
