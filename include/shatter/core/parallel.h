@@ -3,8 +3,9 @@
 //
 // The loops run on shatter's own pool of worker threads (docs/architecture.md, "Threads"). The
 // calling thread always takes part and claims chunks of the range one at a time, as do the
-// workers that are awake; it waits only for chunks a worker has already claimed, never for a
-// worker to arrive. When other programs hold the cores, a descheduled worker therefore costs at
+// workers that are awake (each starting in its own share of the chunks, the caller in the first,
+// then helping with the others'); it waits only for chunks a worker has already claimed, never for
+// a worker to arrive. When other programs hold the cores, a descheduled worker therefore costs at
 // most the chunk it is in, and a worker that never wakes costs nothing: the caller does its share.
 #pragma once
 

@@ -31,34 +31,54 @@ int threads_from_environment() {
 thread_local bool t_in_parallel = false;
 
 #ifdef SHATTER_HAS_THREADS
-// One parallel loop: its chunks are claimed through `next`; `done` counts the finished ones. Held
+// One parallel loop: its chunks are claimed through `ranges`; `done` counts the finished ones. Held
 // by shared_ptr, so a worker that wakes after the loop has returned still reads valid counters (and
 // finds nothing left to claim); `call` and `context` are only used for a claimed chunk, which the
 // caller always waits for.
 struct Job {
+  // The chunks are cut into one range per thread, claimed from its start. Each thread begins with
+  // its own range and then helps with the others', so from one loop to the next a thread tends to
+  // get the same part of the index range (and its data stays in that core's cache), while a late
+  // or descheduled thread's range is still done by the others.
+  struct alignas(64) Range {
+    std::atomic<std::int64_t> next{0};
+    std::int64_t end = 0;
+  };
   std::int64_t chunks = 0;
   void (*call)(void*, std::int64_t) = nullptr;
   void* context = nullptr;
   int helpers_wanted = 0;       // workers that may join (threads - 1)
   std::atomic<int> helpers{0};  // workers that joined
-  std::atomic<std::int64_t> next{0};
+  std::unique_ptr<Range[]> ranges;
+  int parts = 1;
   std::atomic<int> done{0};  // finished chunks (chunks <= 8 kMaxThreads fits an int)
   std::mutex error_mutex;
   std::exception_ptr error;  // the first exception a chunk threw (rethrown by the caller)
 
-  void work() {
-    for (;;) {
-      const std::int64_t c = next.fetch_add(1, std::memory_order_relaxed);
-      if (c >= chunks) return;
-      // A chunk that throws still counts as done, so the caller never waits forever and never
-      // returns (freeing what the loop body refers to) while another chunk runs.
-      try {
-        call(context, c);
-      } catch (...) {
-        const std::lock_guard<std::mutex> lock(error_mutex);
-        if (!error) error = std::current_exception();
+  Job(std::int64_t chunk_count, int threads) : chunks(chunk_count), ranges(new Range[threads]), parts(threads) {
+    for (int p = 0; p < parts; ++p) {
+      ranges[p].next.store(p * chunks / parts, std::memory_order_relaxed);
+      ranges[p].end = (p + 1) * chunks / parts;
+    }
+  }
+
+  // Participant `self`: 0 the caller, 1.. the workers in the order they joined.
+  void work(int self) {
+    for (int k = 0; k < parts; ++k) {
+      Range& range = ranges[(self + k) % parts];
+      for (;;) {
+        const std::int64_t c = range.next.fetch_add(1, std::memory_order_relaxed);
+        if (c >= range.end) break;
+        // A chunk that throws still counts as done, so the caller never waits forever and never
+        // returns (freeing what the loop body refers to) while another chunk runs.
+        try {
+          call(context, c);
+        } catch (...) {
+          const std::lock_guard<std::mutex> lock(error_mutex);
+          if (!error) error = std::current_exception();
+        }
+        if (done.fetch_add(1, std::memory_order_acq_rel) + 1 == chunks) done.notify_all();
       }
-      if (done.fetch_add(1, std::memory_order_acq_rel) + 1 == chunks) done.notify_all();
     }
   }
 };
@@ -67,8 +87,7 @@ class Pool {
  public:
   // Never destroyed (see pool()): the workers sleep until the process ends.
   void run(std::int64_t chunks, void (*call)(void*, std::int64_t), void* context, int threads) {
-    auto job = std::make_shared<Job>();
-    job->chunks = chunks;
+    auto job = std::make_shared<Job>(chunks, threads);
     job->call = call;
     job->context = context;
     job->helpers_wanted = threads - 1;
@@ -80,7 +99,7 @@ class Pool {
     }
     wake_.notify_all();
     t_in_parallel = true;
-    job->work();
+    job->work(0);
     t_in_parallel = false;
     // Wait for the chunks that workers claimed (spin briefly: they are usually nearly done).
     for (int spin = 0; spin < 256; ++spin)
@@ -120,7 +139,9 @@ class Pool {
         seen = generation_;
         job = current_;
       }
-      if (job && job->helpers.fetch_add(1, std::memory_order_relaxed) < job->helpers_wanted) job->work();
+      if (!job) continue;
+      const int joined = job->helpers.fetch_add(1, std::memory_order_relaxed);
+      if (joined < job->helpers_wanted) job->work(joined + 1);
     }
   }
 
