@@ -83,10 +83,19 @@ bool key_less(const Contact& x, const Contact& y) { return contact_key(x) < cont
 
 // Warm start of a manifold's friction and twist from the same manifold's last step `old`: its
 // impulses re-expressed in cc's tangents (set before) and about cc's normal.
-void carry_friction(ContactConstraint& cc, const ContactConstraint& old) {
+struct CarriedFriction {
+  Vec2 impulse;  ///< along the new tangents, N s
+  double twist;  ///< about the new normal, N m s
+};
+CarriedFriction carried_friction(const ContactConstraint& old, const Vec3& normal,
+                                 const std::array<Vec3, 2>& tangents) {
   const Vec3 f = old.friction_impulse.x() * old.tangents[0] + old.friction_impulse.y() * old.tangents[1];
-  cc.friction_impulse = {f.dot(cc.tangents[0]), f.dot(cc.tangents[1])};
-  cc.twist_impulse = old.twist_impulse * old.normal.dot(cc.normal);
+  return {{f.dot(tangents[0]), f.dot(tangents[1])}, old.twist_impulse * old.normal.dot(normal)};
+}
+void carry_friction(ContactConstraint& cc, const ContactConstraint& old) {
+  const CarriedFriction carried = carried_friction(old, cc.normal, cc.tangents);
+  cc.friction_impulse = carried.impulse;
+  cc.twist_impulse = carried.twist;
 }
 
 // Union-find root with path halving.
@@ -757,18 +766,26 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
     total += pair_reused_[k] == 1 ? old_ranges_[k][1] - old_ranges_[k][0] : found.size();
   }
   pair_offsets_[pairs.size()] = total;
-  next.resize(total);
+  // Every pair's contacts where they were last step, as many (pairs at rest): updated in place.
+  bool in_place = total == old.size();
+  for (std::size_t k = 0; k < pairs.size() && in_place; ++k)
+    in_place =
+        pair_reused_[k] == 2 || (pair_offsets_[k] == old_ranges_[k][0] &&
+                                 pair_offsets_[k + 1] - pair_offsets_[k] == old_ranges_[k][1] - old_ranges_[k][0]);
+  if (!in_place) next.resize(total);
+  Contact* const gathered = in_place ? contacts_.data() : next.data();
   parallel_for(
       0, static_cast<std::int64_t>(pairs.size()),
       [&](std::int64_t k) {
         if (pair_reused_[k] == 2) return;
-        Contact* out = next.data() + pair_offsets_[k];
+        Contact* out = gathered + pair_offsets_[k];
         const auto pair_old = old.begin() + static_cast<std::ptrdiff_t>(old_ranges_[k][0]);
         const auto pair_old_end = old.begin() + static_cast<std::ptrdiff_t>(old_ranges_[k][1]);
         if (pair_reused_[k] == 1) {
           move_kept_contacts(std::span(pair_old, pair_old_end), out);
           return;
         }
+        // All matched before any is written: in place, `out` is the pair's old contacts.
         for (Contact& c : pair_contacts_[k]) {
           const auto [lo, hi] = std::equal_range(pair_old, pair_old_end, c, key_less);
           ContactConstraint& cc = c.constraint;
@@ -791,12 +808,12 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
               break;
             }
           }
-          *out++ = std::move(c);
         }
+        for (Contact& c : pair_contacts_[k]) *out++ = std::move(c);
       },
       settings_.parallel_min_pairs);
   until_apart_ = std::move(still_together);
-  contacts_.swap(next);
+  if (!in_place) contacts_.swap(next);
   stats_.reused_pairs = std::count(pair_reused_.begin(), pair_reused_.end(), char{1});
 }
 
@@ -806,16 +823,21 @@ void World::move_kept_contacts(std::span<const Contact> old, Contact* out) const
   const Transform ta = transform_of(a.rigid);
   const Transform tb = transform_of(b.rigid);
   for (const Contact& kept : old) {
-    // A copy of the last step's contact (its pieces, separating-axis cache, origin and impulses),
-    // moved with the bodies; the step's totals start again from zero, as a new contact's would
-    // (prepare_contact sets the rest).
-    Contact& c = *out++ = kept;
-    ContactConstraint& cc = c.constraint;
-    const ContactOrigin& o = kept.origin;
-    cc.normal = ta.rotation * o.normal_a;
+    // The last step's contact (its pieces, separating-axis cache, origin and impulses), moved with
+    // the bodies; the step's totals start again from zero, as a new contact's would (prepare_contact
+    // sets the rest). `out` may be `old` itself (in place): what is read from `kept` is read first.
+    const Vec3 normal = ta.rotation * kept.origin.normal_a;
     // Warm start from its own impulses (as the gather does for contacts found afresh).
-    cc.tangents = tangent_basis(cc.normal);
-    carry_friction(cc, kept.constraint);
+    const std::array<Vec3, 2> tangents = tangent_basis(normal);
+    const CarriedFriction carried = carried_friction(kept.constraint, normal, tangents);
+    Contact& c = *out++;
+    if (&c != &kept) c = kept;
+    ContactConstraint& cc = c.constraint;
+    const ContactOrigin& o = c.origin;
+    cc.normal = normal;
+    cc.tangents = tangents;
+    cc.friction_impulse = carried.impulse;
+    cc.twist_impulse = carried.twist;
     cc.total_friction_impulse.setZero();
     cc.total_twist_impulse = 0;
     for (int i = 0; i < cc.count; ++i) {
