@@ -588,6 +588,8 @@ class World {
   std::vector<SolveGroup> solve_groups_;  ///< the first solve_group_count_ are this step's
   std::size_t solve_group_count_ = 0;
   std::vector<Index> solve_parent_;
+  /// Whether the solver moves the body this step (awake and not static; kinematic bodies included).
+  static bool moves_in_solve(const Body& b) { return b.awake && b.type != BodyType::static_body; }
   void build_solve_groups(std::span<ContactConstraint* const> active, std::span<const Index> moving);
   void solve_group(SolveGroup& group, double h, double inverse_h);
   std::vector<Index> island_parent_;

@@ -895,7 +895,7 @@ void World::solve() {
   std::vector<Index> moving;
   for (Index i = 0; i < n; ++i) {
     const Body& b = bodies_[i];
-    if (b.awake && b.type != BodyType::static_body) {
+    if (moves_in_solve(b)) {
       moving.push_back(i);
       continue;
     }
@@ -944,7 +944,7 @@ void World::build_solve_groups(std::span<ContactConstraint* const> active, std::
   const Index n = body_count();
   solve_parent_.resize(n);
   std::iota(solve_parent_.begin(), solve_parent_.end(), 0);
-  auto moves = [&](Index i) { return bodies_[i].awake && bodies_[i].type != BodyType::static_body; };
+  auto moves = [&](Index i) { return moves_in_solve(bodies_[i]); };
   for (const ContactConstraint* c : active)
     if (moves(c->body_a) && moves(c->body_b)) unite(solve_parent_, c->body_a, c->body_b);
   // Components numbered in the order of their first body; consecutive components fill a group up
