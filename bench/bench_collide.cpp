@@ -50,16 +50,17 @@ std::vector<Aabb> scene(int n, double ground, std::uint64_t seed, double lo, dou
   return boxes;
 }
 
+// Braces draw left to right; a parenthesised call leaves the order of its arguments to the compiler.
 // `n` pieces of 2-10 cm resting on the ground over 10 x 10 m.
 std::vector<Aabb> resting(int n) {
   return scene(n, 6, 1, 0.01, 0.05,
-               [](Random& rng, double half) { return Vec3(rng.uniform(-5, 5), half, rng.uniform(-5, 5)); });
+               [](Random& rng, double half) { return Vec3{rng.uniform(-5, 5), half, rng.uniform(-5, 5)}; });
 }
 
 // `n` bodies of 10-20 cm packed in a 1 m cube above the ground.
 std::vector<Aabb> pile(int n) {
   return scene(n, 3, 2, 0.05, 0.1, [](Random& rng, double) {
-    return Vec3(rng.uniform(-0.5, 0.5), rng.uniform(0.0, 1.0), rng.uniform(-0.5, 0.5));
+    return Vec3{rng.uniform(-0.5, 0.5), rng.uniform(0.0, 1.0), rng.uniform(-0.5, 0.5)};
   });
 }
 
@@ -141,7 +142,8 @@ void BM_HullContact(benchmark::State& state) {
   std::vector<Vec3> sphere_points;
   for (int i = 0; i < 32; ++i) sphere_points.push_back(rng.unit_vec3());
   const ConvexHull round = build_convex_hull(sphere_points).value();
-  const Mat3 tumble = Eigen::AngleAxisd(rng.uniform(0, 2 * std::numbers::pi), rng.unit_vec3()).toRotationMatrix();
+  const double tumble_angle = rng.uniform(0, 2 * std::numbers::pi);
+  const Mat3 tumble = Eigen::AngleAxisd(tumble_angle, rng.unit_vec3()).toRotationMatrix();
   SatCache cache;
   int points = 0;
   for (auto _ : state) {

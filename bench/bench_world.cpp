@@ -63,8 +63,9 @@ std::vector<SceneBody> pile_scene() {
     const Vec3 extent = rng.uniform_vec3(0.05, 0.2);
     SceneBody b;
     b.model = scenes::box_model(0.5 * extent, {}, cells_for_tet_count(extent, 100));
-    b.rigid.position = Vec3(rng.uniform(-0.3, 0.3), 0.3 + 0.25 * (i / 10), rng.uniform(-0.3, 0.3));
-    b.rigid.orientation = Quat(Eigen::AngleAxisd(rng.uniform(0, 3), rng.uniform_vec3(-1, 1).normalized()));
+    // Braces draw left to right (a parenthesised call leaves its arguments' order to the compiler).
+    b.rigid.position = Vec3{rng.uniform(-0.3, 0.3), 0.3 + 0.25 * (i / 10), rng.uniform(-0.3, 0.3)};
+    b.rigid.orientation = Quat(Eigen::AngleAxisd{rng.uniform(0, 3), rng.uniform_vec3(-1, 1).normalized()});
     out.push_back(b);
   }
   return out;

@@ -76,7 +76,7 @@ TEST(BroadPhase, TestsFarFewerPairsThanBruteForceOnASpreadScene) {
   ground.extend(Vec3(11, 0, 11));
   boxes.push_back(ground);
   for (int i = 0; i < 2000; ++i) {
-    const Vec3 c(rng.uniform(-10, 10), rng.uniform(0.0, 0.5), rng.uniform(-10, 10));
+    const Vec3 c{rng.uniform(-10, 10), rng.uniform(0.0, 0.5), rng.uniform(-10, 10)};  // braces: drawn left to right
     Aabb b;
     b.extend(c - Vec3::Constant(0.05));
     b.extend(c + Vec3::Constant(0.05));

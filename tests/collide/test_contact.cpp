@@ -139,13 +139,22 @@ Mat3 rot(double angle, const Vec3& axis) { return Eigen::AngleAxisd(angle, axis.
 
 ConvexHull random_hull(Random& rng, int kind) {
   switch (kind) {
-    case 0: return make_box(rng.uniform_vec3(0.1, 1.0), random_rotation(rng));
-    case 1:
-      return make_prism(3 + static_cast<int>(rng.below(10)), rng.uniform(0.2, 1.0), rng.uniform(0.1, 1.5),
-                        random_rotation(rng));
+    // Each draw in its own statement: the order of a call's arguments is the compiler's choice.
+    case 0: {
+      const Vec3 half = rng.uniform_vec3(0.1, 1.0);
+      return make_box(half, random_rotation(rng));
+    }
+    case 1: {
+      const int sides = 3 + static_cast<int>(rng.below(10));
+      const double radius = rng.uniform(0.2, 1.0), height = rng.uniform(0.1, 1.5);
+      return make_prism(sides, radius, height, random_rotation(rng));
+    }
     case 2: {  // a tetrahedron of decent shape
       std::vector<Vec3> p;
-      for (int i = 0; i < 4; ++i) p.push_back(rng.unit_vec3() * rng.uniform(0.5, 1.0));
+      for (int i = 0; i < 4; ++i) {
+        const Vec3 direction = rng.unit_vec3();
+        p.push_back(direction * rng.uniform(0.5, 1.0));
+      }
       if (std::abs((p[1] - p[0]).dot((p[2] - p[0]).cross(p[3] - p[0]))) < 0.05) return make_box(Vec3(0.3, 0.4, 0.5));
       return make_hull(p, {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2, 3}});
     }
@@ -376,16 +385,18 @@ TEST(Contact, CrossedEdgesGiveOnePointWithTheAnalyticDepth) {
 
 TEST(Contact, RandomPairsMatchBruteForceSeparatingAxes) {
   Random rng(2025);
-  int overlapping = 0, separated = 0, edge_manifolds = 0, face_b_manifolds = 0, empty_overlaps = 0;
+  int overlapping = 0, separated = 0, edge_manifolds = 0, face_b_manifolds = 0, empty_overlaps = 0, edge_fallbacks = 0;
   double worst = 0;
   for (int trial = 0; trial < 600; ++trial) {
     const ConvexHull a = random_hull(rng, static_cast<int>(rng.below(6)));
     const ConvexHull b = random_hull(rng, static_cast<int>(rng.below(6)));
-    const Transform ta = at(rng.uniform_vec3(-2, 2), random_rotation(rng));
+    const Vec3 pa = rng.uniform_vec3(-2, 2);
+    const Transform ta = at(pa, random_rotation(rng));
     // B's centroid at a random distance up to the sum of the radii from A's.
     const Vec3 ca = ta.apply(a.centroid);
     const Mat3 rb = random_rotation(rng);
-    const Vec3 cb = ca + rng.unit_vec3() * rng.uniform(0.0, 1.1) * (a.radius + b.radius);
+    const Vec3 towards = rng.unit_vec3();
+    const Vec3 cb = ca + towards * rng.uniform(0.0, 1.1) * (a.radius + b.radius);
     const Transform tb = at(cb - rb * b.centroid, rb);
     const WorldHull wa = place(a, ta), wb = place(b, tb);
     const double sharpest_a = min_half_corner_sine(a), sharpest_b = min_half_corner_sine(b);
@@ -420,12 +431,17 @@ TEST(Contact, RandomPairsMatchBruteForceSeparatingAxes) {
     EXPECT_NEAR(m.normal.norm(), 1, 1e-12);
     const double along = gap_along(wa, wb, m.normal);
     const double scale = std::min(a.radius, b.radius);
-    EXPECT_GE(along, sat - 0.13 * std::abs(sat) - 0.0041 * scale - 1e-9) << trial << ": preferred axis too far off";
+    const std::uint32_t kind = kind_of(m.points[0].feature);
+    if (along < sat - 0.13 * std::abs(sat) - 0.0041 * scale - 1e-9) {
+      // Only the fallback may give up the best axis: the incident face missed the reference face
+      // (hulls side by side), and the edge pair then takes over with its own, smaller separation.
+      EXPECT_EQ(kind, 2u) << trial << ": preferred axis too far off";
+      ++edge_fallbacks;
+    }
     EXPECT_LE(along, std::max(sat, brute) + 1e-9);
     // Moving B out along the normal by the gap separates the hulls.
     const Transform moved = at(tb.translation + (-along + 1e-6) * m.normal, tb.rotation);
     EXPECT_GT(brute_force_sat(wa, place(b, moved)), 0.5e-6) << trial;
-    const std::uint32_t kind = kind_of(m.points[0].feature);
     edge_manifolds += kind == 2;
     face_b_manifolds += kind == 1;
     std::set<std::uint32_t> features;
@@ -461,13 +477,14 @@ TEST(Contact, RandomPairsMatchBruteForceSeparatingAxes) {
     }
   }
   std::printf(
-      "random pairs: %d overlapping (worst |sat - brute| %.2e), %d separated; %d edge and %d face-of-B manifolds, %d "
-      "empty within the speculative distance\n",
-      overlapping, worst, separated, edge_manifolds, face_b_manifolds, empty_overlaps);
+      "random pairs: %d overlapping (worst |sat - brute| %.2e), %d separated; %d edge and %d face-of-B manifolds "
+      "(%d edge pairs as the fallback), %d empty within the speculative distance\n",
+      overlapping, worst, separated, edge_manifolds, face_b_manifolds, edge_fallbacks, empty_overlaps);
   EXPECT_GT(overlapping, 150);
   EXPECT_GT(separated, 100);
   EXPECT_GT(edge_manifolds, 10);
   EXPECT_GT(face_b_manifolds, 10);
+  EXPECT_LE(edge_fallbacks, 3);  // rare: the preferred axis is the rule
 }
 
 TEST(Contact, CacheStopsAtAStillSeparatingAxis) {
@@ -519,7 +536,8 @@ TEST(Contact, BoxOnPlane) {
   Random rng(5);
   for (int trial = 0; trial < 300; ++trial) {
     const ConvexHull h = random_hull(rng, static_cast<int>(rng.below(6)));
-    const Transform t = at(rng.uniform_vec3(-1, 1), random_rotation(rng));
+    const Vec3 origin = rng.uniform_vec3(-1, 1);
+    const Transform t = at(origin, random_rotation(rng));
     const Plane plane{rng.unit_vec3(), rng.uniform(-0.5, 0.5)};
     const double spec = rng.uniform(0.0, 0.3);
     const auto sep_of = [&](Index i) {
@@ -660,8 +678,9 @@ TEST(Contact, FeatureIdsStayWhileABoxRests) {
     ASSERT_EQ(ids0.size(), 4u);
     for (int step = 0; step < 200; ++step) {
       const double eps = 1e-6;
-      const Transform tb =
-          at(Vec3(0, 1 - 1e-4, 0) + rng.uniform_vec3(-eps, eps), rot(rng.uniform(-eps, eps), rng.unit_vec3()));
+      const Vec3 shift = rng.uniform_vec3(-eps, eps);
+      const double angle = rng.uniform(-eps, eps);
+      const Transform tb = at(Vec3(0, 1 - 1e-4, 0) + shift, rot(angle, rng.unit_vec3()));
       const ContactManifold m = collide_hulls(*lower, at(Vec3::Zero()), unit, tb, 0.01);
       ASSERT_EQ(m.count, 4) << step;
       for (const ManifoldPoint& p : m.points) {

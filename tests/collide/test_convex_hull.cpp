@@ -1,6 +1,8 @@
 // Convex hull: exact boxes however their points come (corners plus interior points, tet-mesh nodes,
 // face grids with round-off noise), random clouds checked against brute force (every point inside,
 // every vertex extreme, the volume of the brute-force supporting planes), support mapping, bad input.
+// Random vectors are built with braces, which draw left to right (parentheses leave the order of the
+// draws to the compiler).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -51,7 +53,7 @@ TEST(ConvexHull, BoxCornersAmongInteriorPoints) {
   const Vec3 lo(-1, 0, 0.5), hi(1, 1, 3.5);
   std::vector<Vec3> points;
   for (int i = 0; i < 300; ++i)
-    points.push_back(lo + Vec3(rng.uniform(), rng.uniform(), rng.uniform()).cwiseProduct(hi - lo));
+    points.push_back(lo + Vec3{rng.uniform(), rng.uniform(), rng.uniform()}.cwiseProduct(hi - lo));  // drawn in order
   for (int c = 0; c < 8; ++c) {
     const Vec3 corner((c & 1) ? hi.x() : lo.x(), (c & 2) ? hi.y() : lo.y(), (c & 4) ? hi.z() : lo.z());
     points.insert(points.begin() + static_cast<std::ptrdiff_t>(rng.below(points.size())), corner);
@@ -158,7 +160,7 @@ TEST(ConvexHull, RandomCloudsMatchBruteForce) {
     const int samples = 20000;
     const Aabb box = hull->bounds;
     for (int s = 0; s < samples; ++s) {
-      const Vec3 x = box.min + Vec3(rng.uniform(), rng.uniform(), rng.uniform()).cwiseProduct(box.extent());
+      const Vec3 x = box.min + Vec3{rng.uniform(), rng.uniform(), rng.uniform()}.cwiseProduct(box.extent());
       bool in = true;
       for (const auto& [normal, offset] : planes) in = in && normal.dot(x) <= offset;
       inside += in;
@@ -220,8 +222,8 @@ TEST(ConvexHull, DegenerateCloudsGiveValidHulls) {
     if (kind == 0) {
       const int m = 2 + static_cast<int>(rng.below(4));
       for (int i = 0; i < 60; ++i)
-        points.push_back(Vec3(static_cast<double>(rng.below(m)), static_cast<double>(rng.below(m)),
-                              static_cast<double>(rng.below(m))));
+        points.push_back(Vec3{static_cast<double>(rng.below(m)), static_cast<double>(rng.below(m)),
+                              static_cast<double>(rng.below(m))});
       points.push_back(Vec3(0, 0, 0)), points.push_back(Vec3(1, 0, 0));
       points.push_back(Vec3(0, 1, 0)), points.push_back(Vec3(0, 0, 1));
     } else if (kind == 1 || kind == 2) {
@@ -293,7 +295,8 @@ TEST(ConvexHull, SupportIsTheBruteForceArgmax) {
   auto hull = build_convex_hull(points);
   ASSERT_TRUE(hull.ok());
   for (int k = 0; k < 2000; ++k) {
-    const Vec3 d = rng.unit_vec3() * rng.uniform(0.1, 10);
+    const Vec3 direction = rng.unit_vec3();
+    const Vec3 d = direction * rng.uniform(0.1, 10);
     Index best = 0;
     for (Index i = 1; i < static_cast<Index>(hull->vertices.size()); ++i)
       if (hull->vertices[i].dot(d) > hull->vertices[best].dot(d)) best = i;
@@ -343,8 +346,9 @@ TEST(ConvexHull, DegenerateInputIsAnError) {
   Random rng(4);
   std::vector<Vec3> line, plane;
   for (int i = 0; i < 50; ++i) {
-    line.push_back(Vec3(1, 2, 3) * rng.uniform(-1, 1) + rng.uniform_vec3(-1e-13, 1e-13));
-    plane.push_back(Vec3(rng.uniform(-1, 1), 0.5 * rng.uniform(-1, 1), rng.uniform(-1e-12, 1e-12)));
+    const double along = rng.uniform(-1, 1);
+    line.push_back(Vec3(1, 2, 3) * along + rng.uniform_vec3(-1e-13, 1e-13));
+    plane.push_back(Vec3{rng.uniform(-1, 1), 0.5 * rng.uniform(-1, 1), rng.uniform(-1e-12, 1e-12)});
   }
   fails(line, "collinear");
   fails(plane, "coplanar");

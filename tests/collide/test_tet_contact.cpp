@@ -25,7 +25,8 @@ TetContactShape box_shape(const Vec3& lo, const Vec3& hi, std::array<Index, 3> c
 }
 
 Mat3 random_rotation(Random& rng) {
-  return Eigen::AngleAxisd(rng.uniform(0, 2 * std::numbers::pi), rng.unit_vec3()).toRotationMatrix();
+  const double angle = rng.uniform(0, 2 * std::numbers::pi);  // drawn first, whatever the compiler
+  return Eigen::AngleAxisd(angle, rng.unit_vec3()).toRotationMatrix();
 }
 
 Mat3 rotation_about(const Vec3& axis, double angle) { return Eigen::AngleAxisd(angle, axis).toRotationMatrix(); }
@@ -91,7 +92,7 @@ std::vector<Vec3> query_points(Random& rng, const TetMesh& m, int count, double 
   const Vec3 pad = grow * b.extent();
   std::vector<Vec3> pts;
   for (int i = 0; i < count; ++i) {
-    const Vec3 u(rng.uniform(), rng.uniform(), rng.uniform());
+    const Vec3 u{rng.uniform(), rng.uniform(), rng.uniform()};  // braces: drawn left to right
     pts.push_back(b.min - pad + u.cwiseProduct(b.extent() + 2 * pad));
   }
   // Nodes and face centroids, exactly and moved by far less than the containment tolerance.

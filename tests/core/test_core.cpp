@@ -69,16 +69,9 @@ TEST(Hash, StableAndSensitive) {
 }
 
 // Sanitizers replace the allocator (their mallopt does nothing): the settings are glibc's.
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-#define SHATTER_TEST_OWN_ALLOCATOR 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || __has_feature(memory_sanitizer)
-#define SHATTER_TEST_OWN_ALLOCATOR 1
-#endif
-#endif
 
 TEST(Memory, FreedBlocksStayInTheProcess) {
-#if defined(SHATTER_TEST_OWN_ALLOCATOR)
+#if defined(SHATTER_TEST_SANITIZED)
   GTEST_SKIP() << "a sanitizer's allocator replaces glibc's";
 #elif defined(__GLIBC__)
   ASSERT_TRUE(keep_freed_memory());

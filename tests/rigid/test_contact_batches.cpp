@@ -28,7 +28,8 @@ Problem random_setup(int n_bodies, int n_constraints, std::uint64_t seed) {
   for (int i = 0; i < n_bodies; ++i) {
     SolverBody b;
     b.position = rng.uniform_vec3(-2, 2);
-    b.rotation = Quat(Eigen::AngleAxisd(rng.uniform(0, 3), rng.uniform_vec3(-1, 1).normalized())).toRotationMatrix();
+    // Braces draw left to right (a parenthesised call leaves its arguments' order to the compiler).
+    b.rotation = Quat(Eigen::AngleAxisd{rng.uniform(0, 3), rng.uniform_vec3(-1, 1).normalized()}).toRotationMatrix();
     const bool fixed = i % 5 == 0;
     const bool kinematic = i == 1;
     if (!fixed) {
@@ -64,7 +65,7 @@ Problem random_setup(int n_bodies, int n_constraints, std::uint64_t seed) {
       p.separation = rng.uniform(-0.01, 0.005);
       p.normal_impulse = rng.uniform(0, 0.5);  // warm start
     }
-    c.friction_impulse = Eigen::Vector2d(rng.uniform(-0.1, 0.1), rng.uniform(-0.1, 0.1));
+    c.friction_impulse = Eigen::Vector2d{rng.uniform(-0.1, 0.1), rng.uniform(-0.1, 0.1)};
     c.twist_impulse = rng.uniform(-0.01, 0.01);
     prepare_contact(c, s.bodies, 0.01);
     if (c.a_responds || c.b_responds) s.constraints.push_back(c);

@@ -155,7 +155,8 @@ TEST(RigidIntegrate, FourAtATimeGiveTheBitsOfOneAtATime) {
         RigidState& s = one[i];
         s.position = rng.uniform_vec3(-1, 1);
         s.linear_velocity = rng.uniform_vec3(-2, 2);
-        s.orientation = Quat(Eigen::AngleAxisd(rng.uniform(0, 3), rng.uniform_vec3(-1, 1).normalized()));
+        // Braces draw left to right (a parenthesised call leaves its arguments' order to the compiler).
+        s.orientation = Quat(Eigen::AngleAxisd{rng.uniform(0, 3), rng.uniform_vec3(-1, 1).normalized()});
         const double speed = std::array{0.0, 1e-4, 1.0, 300.0}[rng.below(4)];
         s.angular_velocity = speed * rng.uniform_vec3(-1, 1);
         inertia[i] = trial % 7 == 0 && i == 0 ? &kinematic : &dynamic;

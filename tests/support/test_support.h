@@ -11,7 +11,24 @@
 #include "shatter/core/error.h"
 #include "shatter/mesh/topology.h"
 
+// Built with AddressSanitizer or ThreadSanitizer: GCC defines __SANITIZE_*__, clang answers
+// __has_feature. Tests use it to skip what a sanitizer's runtime forbids (address-space limits,
+// glibc's allocator settings) and to shorten runs that are ten times slower there.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define SHATTER_TEST_SANITIZED 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || __has_feature(memory_sanitizer)
+#define SHATTER_TEST_SANITIZED 1
+#endif
+#endif
+
 namespace shatter::test {
+
+#if defined(SHATTER_TEST_SANITIZED)
+inline constexpr bool kSanitized = true;
+#else
+inline constexpr bool kSanitized = false;
+#endif
 
 /// Route library warnings to the current test: an unexpected warning fails it.
 void install_warning_guard();

@@ -264,8 +264,9 @@ std::uint64_t pile_hash(int threads, int steps, int restore_at, std::int64_t gro
   Random rng(11);
   for (std::size_t i = 0; i < pieces.size(); ++i) {
     BodyDef def;
-    def.rigid.position = Vec3(rng.uniform(-0.2, 0.2), 0.1 + 0.15 * static_cast<double>(i), rng.uniform(-0.2, 0.2));
-    def.rigid.orientation = Quat(Eigen::AngleAxisd(rng.uniform(0, 3), rng.uniform_vec3(-1, 1).normalized()));
+    // Braces draw left to right (a parenthesised call leaves its arguments' order to the compiler).
+    def.rigid.position = Vec3{rng.uniform(-0.2, 0.2), 0.1 + 0.15 * static_cast<double>(i), rng.uniform(-0.2, 0.2)};
+    def.rigid.orientation = Quat(Eigen::AngleAxisd{rng.uniform(0, 3), rng.uniform_vec3(-1, 1).normalized()});
     (void)*w.add_body(pieces[i], def);
   }
   WorldSnapshot snap;
