@@ -3,7 +3,7 @@
 #   0. layout (.clang-format) of every C++ file; after the release build, clang-tidy (.clang-tidy)
 #      over the library and tool sources;
 #   1. release build, all tests (unit, property, cross-checks against meshio and CalculiX);
-#   2. the same tests under AddressSanitizer + UBSan;
+#   2. the same tests under AddressSanitizer + UBSan (clang-19);
 #   3. the tests of the threaded code (labels core, fem, solve, fracture, meshing) under
 #      ThreadSanitizer (clang-19), no suppressions; shatter's worker pool synchronises through
 #      the standard library's mutexes and atomics, which TSan sees.
