@@ -436,6 +436,7 @@ TEST(Contact, RandomPairsMatchBruteForceSeparatingAxes) {
       // Only the fallback may give up the best axis: the incident face missed the reference face
       // (hulls side by side), and the edge pair then takes over with its own, smaller separation.
       EXPECT_EQ(kind, 2u) << trial << ": preferred axis too far off";
+      EXPECT_NE(axis.kind, 3) << trial << ": the best axis was a face, whose contact missed";
       ++edge_fallbacks;
     }
     EXPECT_LE(along, std::max(sat, brute) + 1e-9);

@@ -69,7 +69,6 @@ TEST(Hash, StableAndSensitive) {
 }
 
 // Sanitizers replace the allocator (their mallopt does nothing): the settings are glibc's.
-
 TEST(Memory, FreedBlocksStayInTheProcess) {
 #if defined(SHATTER_TEST_SANITIZED)
   GTEST_SKIP() << "a sanitizer's allocator replaces glibc's";
