@@ -324,8 +324,6 @@ CutResult split_along_plane(const TetMesh& mesh, const CutPlane& plane, const st
   r.tet_parent.resize(nt);
   std::iota(r.tet_parent.begin(), r.tet_parent.end(), Index(0));
   r.tet_side.assign(nt, 0);
-  std::vector<char> in_region(nt, 0);
-  for (Index e : region) in_region[e] = 1;
   std::vector<Index> extra_parents;
   for (std::size_t c = 0; c < cand.size(); ++c) {
     const Index e = cand[c];
