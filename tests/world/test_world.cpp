@@ -244,15 +244,24 @@ TEST(World, FastThinShardDoesNotTunnel) {
   }
 }
 
+// Per step of pile_hash: the pairs the broad phase gave, and whether it kept the grid's pairs.
+struct PileSteps {
+  std::vector<std::int64_t> pairs;
+  int grid_kept = 0;
+};
+
 // 40 pieces dropped into a pile beside a kinematic paddle that sweeps through it (joining the
-// islands it touches), on `threads` threads, solved in groups of `group_bodies` moving bodies.
-std::uint64_t pile_hash(int threads, int steps, int restore_at, std::int64_t group_bodies = 1) {
+// islands it touches), on `threads` threads, solved in groups of `group_bodies` moving bodies, the
+// broad phase's boxes grown by `growth`.
+std::uint64_t pile_hash(int threads, int steps, int restore_at, std::int64_t group_bodies = 1,
+                        double growth = WorldSettings{}.broad_phase_growth, PileSteps* record = nullptr) {
   const int saved_threads = num_threads();
   set_num_threads(threads);
   WorldSettings settings = scenes::settings(true);
   settings.parallel_min_pairs = 1;  // every parallel loop runs parallel even in this small pile
   settings.parallel_min_bodies = 1;
   settings.solve_group_bodies = group_bodies;
+  settings.broad_phase_growth = growth;
   World w(settings);
   add_ground(w);
   BodyDef paddle;
@@ -275,6 +284,10 @@ std::uint64_t pile_hash(int threads, int steps, int restore_at, std::int64_t gro
     if (i == restore_at) snap = w.save();
     w.step();
     most_groups = std::max(most_groups, w.stats().solve_groups);
+    if (record != nullptr) {
+      record->pairs.push_back(w.stats().body_pairs);
+      record->grid_kept += w.stats().grid_kept ? 1 : 0;
+    }
   }
   if (group_bodies == 1) {
     EXPECT_GT(most_groups, 10);  // the islands were solved apart
@@ -307,6 +320,60 @@ TEST(World, SolvingIslandsInGroupsKeepsTheBits) {
   EXPECT_EQ(pile_hash(2, steps, -1, 1), one_group);
   EXPECT_EQ(pile_hash(2, steps, -1, 5), one_group);
   EXPECT_EQ(pile_hash(4, steps, -1, 1), one_group);
+}
+
+// 40 pieces dropped into a pile with sleeping off (every body stays awake and in the broad phase),
+// its boxes grown by `growth`; a save at `restore_at` (>= 0) restored at the end and run again.
+std::uint64_t settling_pile_hash(double growth, int threads, int steps, int restore_at, PileSteps& record) {
+  const int saved_threads = num_threads();
+  set_num_threads(threads);
+  WorldSettings settings = scenes::settings(false);
+  settings.broad_phase_growth = growth;
+  World w(settings);
+  add_ground(w);
+  const auto pieces = scenes::random_pieces(40, 0.03, 0.12, 60, 5);
+  Random rng(3);
+  for (std::size_t i = 0; i < pieces.size(); ++i) {
+    BodyDef def;
+    def.rigid.position = Vec3{rng.uniform(-0.15, 0.15), 0.1 + 0.05 * static_cast<double>(i), rng.uniform(-0.15, 0.15)};
+    def.rigid.orientation = Quat(Eigen::AngleAxisd{rng.uniform(0, 3), rng.uniform_vec3(-1, 1).normalized()});
+    (void)*w.add_body(pieces[i], def);
+  }
+  WorldSnapshot snap;
+  for (int i = 0; i < steps; ++i) {
+    if (i == restore_at) snap = w.save();
+    w.step();
+    record.pairs.push_back(w.stats().body_pairs);
+    record.grid_kept += w.stats().grid_kept ? 1 : 0;
+  }
+  if (restore_at >= 0) {
+    const std::uint64_t straight = w.state_hash();
+    EXPECT_TRUE(w.restore(snap).ok());
+    for (int i = restore_at; i < steps; ++i) w.step();
+    EXPECT_EQ(w.state_hash(), straight);
+  }
+  set_num_threads(saved_threads);
+  return w.state_hash();
+}
+
+// The broad phase keeps the grid's pairs while every box stays inside its grown box, and takes
+// from them the pairs whose boxes overlap: the same pairs, step by step, and the same bits as a
+// grid run on the boxes of every step, whatever the growth (0: the grid runs whenever a box
+// changes; 1: grown boxes three times the size, many kept pairs apart).
+TEST(World, BroadPhaseGrowthKeepsThePairsAndTheBits) {
+  const int steps = 240;  // the pile settles: most later steps keep the grid's pairs
+  PileSteps none, some, much, restored;
+  const std::uint64_t h0 = settling_pile_hash(0.0, 1, steps, -1, none);
+  EXPECT_EQ(settling_pile_hash(0.05, 1, steps, -1, some), h0);
+  EXPECT_EQ(settling_pile_hash(1.0, 2, steps, -1, much), h0);
+  EXPECT_EQ(some.pairs, none.pairs);
+  EXPECT_EQ(much.pairs, none.pairs);
+  EXPECT_EQ(none.grid_kept, 0);  // something moves every step
+  EXPECT_GT(some.grid_kept, steps / 4);
+  EXPECT_GE(much.grid_kept, some.grid_kept);
+  EXPECT_EQ(settling_pile_hash(0.05, 2, steps, 150, restored), h0);  // kept pairs across a restore
+  // With a sweeping paddle pushing pieces every step, too.
+  EXPECT_EQ(pile_hash(2, 150, -1, 1, 1.0), pile_hash(2, 150, -1, 1, 0.0));
 }
 
 TEST(World, StateHashIsTheSameWithEitherInstructionSet) {

@@ -136,6 +136,10 @@ struct WorldSettings {
   /// side by side, a group on one thread: groups of at least this many moving bodies, an island
   /// never split. Results do not depend on it.
   std::int64_t solve_group_bodies = 64;
+  /// The broad phase's grid runs on each body's box grown by this fraction of its largest extent,
+  /// and the pairs it finds serve, filtered by the boxes of the step, until some box leaves its
+  /// grown box: bodies at rest skip the grid. Results do not depend on it.
+  double broad_phase_growth = 0.05;
   /// Impact events (docs/impacts.md): a pair of bodies whose contacts first carry an impulse at an
   /// approach speed of at least impact.min_approach_speed opens an event, which stays open until
   /// the pair no longer touches. Each breakable body of a new event is analysed once
@@ -251,6 +255,7 @@ struct BodySurface {
 struct StepStats {
   std::int64_t awake_bodies = 0;
   std::int64_t body_pairs = 0;    ///< pairs from the broad phase (and planes)
+  bool grid_kept = false;         ///< the broad phase kept the grid's pairs (WorldSettings::broad_phase_growth)
   std::int64_t reused_pairs = 0;  ///< of them, pairs that kept their contacts (contact_reuse_distance)
   std::int64_t contacts = 0;      ///< manifolds solved
   std::int64_t contact_points = 0;
@@ -568,6 +573,11 @@ class World {
   BroadPhase broad_phase_;
   // Scratch kept between steps.
   std::vector<Aabb> boxes_;
+  /// The boxes the grid last ran on (each body's box grown by a margin) and the pairs it found:
+  /// while every body's box stays inside its grown box, those pairs hold every pair of
+  /// overlapping boxes (find_pairs).
+  std::vector<Aabb> grown_boxes_;
+  std::vector<PairRef> grown_pairs_;
   std::vector<PairRef> pairs_;
   std::vector<std::vector<Contact>> pair_contacts_;
   std::vector<std::array<std::size_t, 2>> old_ranges_;  ///< per pair: its contacts_ of the last step

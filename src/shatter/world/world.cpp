@@ -563,8 +563,37 @@ void World::find_pairs(std::vector<PairRef>& pairs) {
     const Body& b = bodies_[i];
     boxes_[i] = b.is_plane || b.removed ? Aabb{} : grow(slot_bounds(i), half_margin + motion_bound(b));
   }
+  // The grid runs on the boxes grown by a margin, and its pairs are kept while every box stays
+  // inside its grown box: two boxes that overlap then have grown boxes that overlap, so the kept
+  // pairs whose boxes overlap now are exactly the pairs the grid would find on the boxes (the
+  // same pairs, in the same order). Bodies at rest keep their grown boxes step after step.
+  const auto valid = [](const Aabb& b) { return !b.empty() && b.min.allFinite() && b.max.allFinite(); };
+  bool keep = grown_boxes_.size() == boxes_.size();
+  for (Index i = 0; i < n && keep; ++i) {
+    const Aabb& b = boxes_[i];
+    const Aabb& g = grown_boxes_[i];
+    keep = valid(b) ? (g.min.array() <= b.min.array()).all() && (b.max.array() <= g.max.array()).all()
+                    : b.empty() && g.empty();
+  }
+  if (!keep) {
+    // Never shrunk (a box must lie inside its grown box), never infinite (the grid skips those).
+    const double growth = std::isfinite(settings_.broad_phase_growth) && settings_.broad_phase_growth > 0
+                              ? settings_.broad_phase_growth
+                              : 0.0;
+    grown_boxes_.resize(n);
+    for (Index i = 0; i < n; ++i) {
+      grown_boxes_[i] = Aabb{};
+      if (!valid(boxes_[i])) continue;
+      grown_boxes_[i] = grow(boxes_[i], growth * boxes_[i].extent().maxCoeff());
+      if (!valid(grown_boxes_[i])) grown_boxes_[i] = boxes_[i];
+    }
+    grown_pairs_.clear();
+    for (const BodyPair& p : broad_phase_.find_pairs(grown_boxes_)) grown_pairs_.push_back({p.first, p.second});
+  }
+  stats_.grid_kept = keep;
   pairs.clear();
-  for (const BodyPair& p : broad_phase_.find_pairs(boxes_)) pairs.push_back({p.first, p.second});
+  for (const PairRef& p : grown_pairs_)
+    if (boxes_overlap(boxes_[p.a], boxes_[p.b])) pairs.push_back(p);
   for (Index p = 0; p < n; ++p) {
     if (!bodies_[p].is_plane) continue;
     const Plane& plane = bodies_[p].shape->plane;
