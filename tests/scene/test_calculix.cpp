@@ -176,7 +176,11 @@ void expect_nonlinear_agreement(const Comparison& c, const char* name) {
   const std::vector<NewtonIteration>& h = c.report.history;
   ASSERT_GE(h.size(), 3u);
   std::string trace;
-  for (const NewtonIteration& it : h) trace += " " + std::to_string(it.relative_residual);
+  for (const NewtonIteration& it : h) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, " %.2e", it.relative_residual);
+    trace += buf;
+  }
   std::printf("%s: residual history%s\n", name, trace.c_str());
   const double tolerance = StaticSolverOptions{}.relative_residual_tolerance;
   EXPECT_LE(h.back().relative_residual, tolerance);
