@@ -799,6 +799,17 @@ TEST(Impacts, SliceCutsABodyInTwoThatFlyApart) {
     EXPECT_EQ(w.parent(f.body), *id);
   }
   EXPECT_NEAR(total, mass, 1e-12 * mass);
+  // The cut's events are also the next step's (a loop that reads events() after each step sees
+  // them once), and are gone the step after.
+  w.step();
+  EXPECT_EQ(w.events().cracks.size(), 1U);
+  EXPECT_EQ(w.events().fragments.size(), 2U);
+  ASSERT_EQ(w.events().removed.size(), 1U);
+  EXPECT_EQ(w.events().removed[0], *id);
+  w.step();
+  EXPECT_TRUE(w.events().cracks.empty());
+  EXPECT_TRUE(w.events().fragments.empty());
+  EXPECT_TRUE(w.events().removed.empty());
   // The halves keep spinning apart, then fall and lie on the ground; nothing is lost or tunnels.
   for (int i = 0; i < 120; ++i) w.step();
   Index live = 0;

@@ -349,7 +349,8 @@ class World {
   /// A saw: cut the body at once along the plane through `point` with `normal` (world). Its pieces
   /// replace it as after a fracture (slice_body): exact masses, the body's motion, crack faces,
   /// siblings kept apart until they separate. The crack and the fragments are added to events()
-  /// (with an impact record of no impulse). Returns the number of pieces (0: the plane misses
+  /// (with an impact record of no impulse), there at once and among the next step's events.
+  /// Returns the number of pieces (0: the plane misses
   /// the body, which stays as it is). Errors: an invalid or removed id, a body that is not a
   /// dynamic tet body, a non-finite point or normal, a zero normal.
   Result<Index> slice(BodyId id, const Vec3& point, const Vec3& normal);
@@ -390,7 +391,9 @@ class World {
   /// Contacts of the last step, sorted by (body_a, body_b, piece_a, piece_b).
   [[nodiscard]] std::span<const Contact> contacts() const { return contacts_; }
   [[nodiscard]] const StepStats& stats() const { return stats_; }
-  /// Impacts, cracks, fragments and removals of the last step.
+  /// Impacts, cracks, fragments and removals of the last step, after those of the calls made
+  /// before it (slice): read once after each step, every event is seen once. A call's events are
+  /// there at once too, and stay until the step after the next.
   [[nodiscard]] const StepEvents& events() const { return events_; }
   [[nodiscard]] const WorldSettings& settings() const { return settings_; }
   [[nodiscard]] std::int64_t step_count() const { return step_count_; }
@@ -570,6 +573,10 @@ class World {
   std::vector<std::uint32_t> generations_;  ///< generations issued per slot (not part of the state)
   StepStats stats_;
   StepEvents events_;
+  /// Sizes of events_'s lists when the last step ended (impacts, cracks, fragments, removed):
+  /// what came after is from calls between steps, kept for the next step's events.
+  std::array<std::size_t, 4> step_events_end_{};
+  void advance();  ///< the step's work (step() keeps the events right around it)
   BroadPhase broad_phase_;
   // Scratch kept between steps.
   std::vector<Aabb> boxes_;

@@ -1739,7 +1739,19 @@ void World::step_deformables() {
 
 void World::step() {
   stats_ = {};
-  events_ = {};
+  // The last step's events go; those of calls made since (slice) stay, as this step's.
+  const auto drop_front = [](auto& list, std::size_t count) {
+    list.erase(list.begin(), list.begin() + static_cast<std::ptrdiff_t>(std::min(count, list.size())));
+  };
+  drop_front(events_.impacts, step_events_end_[0]);
+  drop_front(events_.cracks, step_events_end_[1]);
+  drop_front(events_.fragments, step_events_end_[2]);
+  drop_front(events_.removed, step_events_end_[3]);
+  advance();
+  step_events_end_ = {events_.impacts.size(), events_.cracks.size(), events_.fragments.size(), events_.removed.size()};
+}
+
+void World::advance() {
   push_tools();
   // Nothing to do while every dynamic body sleeps and no kinematic body moves.
   const bool anything_moves = std::any_of(bodies_.begin(), bodies_.end(), [](const Body& b) {
@@ -1819,6 +1831,7 @@ Result<void> World::restore(const WorldSnapshot& snapshot) {
   tools_ = s.tools;
   step_count_ = s.step_count;
   events_ = {};
+  step_events_end_ = {};
   return {};
 }
 
