@@ -1,13 +1,16 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <numeric>
 #include <stdexcept>
+#include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #if defined(__GLIBC__)
@@ -17,6 +20,7 @@
 #include "shatter/core/error.h"
 #include "shatter/core/file_io.h"
 #include "shatter/core/hash.h"
+#include "shatter/core/log.h"
 #include "shatter/core/memory.h"
 #include "shatter/core/parallel.h"
 #include "shatter/core/random.h"
@@ -38,6 +42,38 @@ TEST(Result, CarriesValueOrError) {
   Result<int> b = make_error("no");
   ASSERT_FALSE(b.ok());
   EXPECT_EQ(b.error().message, "no");
+}
+
+// The library's messages all go to the sink the application sets, from any thread, each whole and
+// with its level; setting a sink hands back the one it replaces.
+TEST(Log, SinkTakesEveryMessageFromAnyThread) {
+  std::vector<std::pair<LogLevel, std::string>> got;  // the sink is called one message at a time
+  LogSink previous = set_log_sink([&](LogLevel level, std::string_view message) { got.emplace_back(level, message); });
+  ASSERT_TRUE(previous);  // the tests' guard
+  log_warning("first");
+  log_info("second");
+  log_message(LogLevel::error, "third");
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t)
+    threads.emplace_back([t] {
+      for (int i = 0; i < 100; ++i) log_message(LogLevel::debug, "thread " + std::to_string(t));
+    });
+  for (std::thread& t : threads) t.join();
+  LogSink ours = set_log_sink(std::move(previous));
+  EXPECT_TRUE(ours);
+  ASSERT_EQ(got.size(), 403u);
+  EXPECT_EQ(got[0], std::make_pair(LogLevel::warning, std::string("first")));
+  EXPECT_EQ(got[1], std::make_pair(LogLevel::info, std::string("second")));
+  EXPECT_EQ(got[2], std::make_pair(LogLevel::error, std::string("third")));
+  std::array<int, 4> per_thread{};
+  for (std::size_t k = 3; k < got.size(); ++k) {
+    EXPECT_EQ(got[k].first, LogLevel::debug);
+    ASSERT_EQ(got[k].second.rfind("thread ", 0), 0u);
+    ++per_thread[static_cast<std::size_t>(got[k].second.back() - '0')];
+  }
+  for (const int n : per_thread) EXPECT_EQ(n, 100);
+  log_info("after");  // to the restored sink, not ours
+  EXPECT_EQ(got.size(), 403u);
 }
 
 TEST(Random, MapsBitsDeterministically) {

@@ -378,6 +378,9 @@ TEST(Impacts, CinderBlockDroppedOnAnotherBreaksIt) {
     EXPECT_TRUE(upper_id.ok());
     int impacts = 0;
     bool both_in_one_step = false;
+    // The lower block's break in the events: its cracks, its fragments and debris, its removal.
+    int lower_cracks = 0, lower_cracks_counted = 0, lower_removed = 0;
+    double lower_pieces_mass = 0;
     for (int step = 0; step < 60; ++step) {
       w.step();
       std::set<Index> analysed;
@@ -387,10 +390,29 @@ TEST(Impacts, CinderBlockDroppedOnAnotherBreaksIt) {
         // Every static solve converges, the pieces' too (pieces hit along their length are held by
         // inertia relief, not clamped at one end).
         EXPECT_TRUE(e.converged) << "t " << e.time << " body " << e.body.index;
+        if (e.body == *lower_id) {
+          lower_cracks_counted += static_cast<int>(e.cracks);
+          lower_pieces_mass += e.debris_mass;
+        }
       }
+      for (const CrackRecord& c : w.events().cracks) {
+        if (c.body != *lower_id) continue;
+        ++lower_cracks;
+        EXPECT_NEAR(c.normal.norm(), 1.0, 1e-12);
+        EXPECT_TRUE(c.origin.allFinite());
+        EXPECT_GT(c.radius, 0);
+        EXPECT_GT(c.stress, 0);  // a tension (each tet has its own strength: no fixed bound)
+      }
+      for (const FragmentRecord& f : w.events().fragments)
+        if (f.parent == *lower_id) lower_pieces_mass += f.mass;
+      for (const BodyId r : w.events().removed) lower_removed += r == *lower_id;
       both_in_one_step |= analysed.count(lower_id->index) > 0 && analysed.count(upper_id->index) > 0;
     }
     EXPECT_TRUE(w.removed(*lower_id)) << "the lower block did not break";
+    EXPECT_GE(lower_cracks, 1);
+    EXPECT_EQ(lower_cracks, lower_cracks_counted);
+    EXPECT_EQ(lower_removed, 1);
+    EXPECT_NEAR(lower_pieces_mass, block->mass.mass, 1e-12 * block->mass.mass);  // fragments and debris
     EXPECT_TRUE(both_in_one_step);
     EXPECT_GE(impacts, 2);
     set_num_threads(saved);
