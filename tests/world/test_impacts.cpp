@@ -648,11 +648,18 @@ TEST(Impacts, Soak) {
         const Vec3 point = surface.positions[rng.below(surface.positions.size())];
         const Vec3 inward = (w.rigid_state(id).position - point).normalized();
         const double kind = rng.uniform(0, 3);
+        // Drawn one statement at a time: a call's arguments are drawn in an order each compiler picks.
+        const double size = rng.uniform(0, 1);
+        const double speed_or_radius = rng.uniform(0, 1);
+        const double radius_or_duration = rng.uniform(0, 1);
         if (kind < 1) {
-          blows += w.strike(id, point, rng.uniform(0.5, 20) * inward, rng.uniform(1, 15), rng.uniform(0, 0.02)).ok();
+          blows +=
+              w.strike(id, point, (0.5 + 19.5 * size) * inward, 1 + 14 * speed_or_radius, 0.02 * radius_or_duration)
+                  .ok();
         } else if (kind < 2) {
           blows +=
-              w.press(id, point, rng.uniform(10, 5000) * inward, rng.uniform(0.005, 0.03), rng.uniform(0, 0.2)).ok();
+              w.press(id, point, (10 + 4990 * size) * inward, 0.005 + 0.025 * speed_or_radius, 0.2 * radius_or_duration)
+                  .ok();
         } else {
           // A saw through the body's centre (a deformable body is no rigid tet body: an error).
           blows += w.slice(id, w.rigid_state(id).position, rng.uniform_vec3(-1, 1)).ok();
