@@ -34,6 +34,9 @@ struct BroadPhaseStats {
   std::int64_t box_tests = 0;    ///< box-box overlap tests made
 };
 
+/// A box the grid takes in: not empty, with finite corners (the others are skipped).
+bool valid_box(const Aabb& b);
+
 /// Two boxes overlap (closed intervals: touching counts).
 bool boxes_overlap(const Aabb& a, const Aabb& b);
 

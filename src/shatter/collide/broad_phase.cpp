@@ -10,8 +10,6 @@ namespace {
 
 using Cell = std::array<std::int64_t, 3>;
 
-bool valid_box(const Aabb& b) { return !b.empty() && b.min.allFinite() && b.max.allFinite(); }
-
 // Cell coordinates of p. Monotone in p (subtraction and division by h > 0 are), so the cell of a
 // point inside a box lies within the box's cell range.
 Cell cell_of(const Vec3& p, const Vec3& origin, double h) {
@@ -39,6 +37,8 @@ double median_extent(const std::vector<Aabb>& boxes) {
 }
 
 }  // namespace
+
+bool valid_box(const Aabb& b) { return !b.empty() && b.min.allFinite() && b.max.allFinite(); }
 
 bool boxes_overlap(const Aabb& a, const Aabb& b) {
   return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();

@@ -567,13 +567,12 @@ void World::find_pairs(std::vector<PairRef>& pairs) {
   // inside its grown box: two boxes that overlap then have grown boxes that overlap, so the kept
   // pairs whose boxes overlap now are exactly the pairs the grid would find on the boxes (the
   // same pairs, in the same order). Bodies at rest keep their grown boxes step after step.
-  const auto valid = [](const Aabb& b) { return !b.empty() && b.min.allFinite() && b.max.allFinite(); };
   bool keep = grown_boxes_.size() == boxes_.size();
   for (Index i = 0; i < n && keep; ++i) {
     const Aabb& b = boxes_[i];
     const Aabb& g = grown_boxes_[i];
-    keep = valid(b) ? (g.min.array() <= b.min.array()).all() && (b.max.array() <= g.max.array()).all()
-                    : b.empty() && g.empty();
+    keep = valid_box(b) ? (g.min.array() <= b.min.array()).all() && (b.max.array() <= g.max.array()).all()
+                        : b.empty() && g.empty();
   }
   if (!keep) {
     // Never shrunk (a box must lie inside its grown box), never infinite (the grid skips those).
@@ -583,9 +582,9 @@ void World::find_pairs(std::vector<PairRef>& pairs) {
     grown_boxes_.resize(n);
     for (Index i = 0; i < n; ++i) {
       grown_boxes_[i] = Aabb{};
-      if (!valid(boxes_[i])) continue;
+      if (!valid_box(boxes_[i])) continue;
       grown_boxes_[i] = grow(boxes_[i], growth * boxes_[i].extent().maxCoeff());
-      if (!valid(grown_boxes_[i])) grown_boxes_[i] = boxes_[i];
+      if (!valid_box(grown_boxes_[i])) grown_boxes_[i] = boxes_[i];
     }
     grown_pairs_.clear();
     for (const BodyPair& p : broad_phase_.find_pairs(grown_boxes_)) grown_pairs_.push_back({p.first, p.second});
