@@ -11,6 +11,7 @@
 #include "shatter/scene/static_case.h"
 #include "shatter/scene/static_results.h"
 #include "shatter/solve/static_solver.h"
+#include "solve/solve_test_util.h"
 #include "support/test_support.h"
 #include "tools/calculix.h"
 
@@ -175,12 +176,7 @@ void expect_nonlinear_agreement(const Comparison& c, const char* name) {
   // are left out: there the inexact linear solve (a tolerance loosened to what Newton needs) sets them.
   const std::vector<NewtonIteration>& h = c.report.history;
   ASSERT_GE(h.size(), 3u);
-  std::string trace;
-  for (const NewtonIteration& it : h) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, " %.2e", it.relative_residual);
-    trace += buf;
-  }
+  const std::string trace = test::residual_trace(h);
   std::printf("%s: residual history%s\n", name, trace.c_str());
   const double tolerance = StaticSolverOptions{}.relative_residual_tolerance;
   EXPECT_LE(h.back().relative_residual, tolerance);

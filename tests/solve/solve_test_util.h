@@ -2,11 +2,14 @@
 #pragma once
 
 #include <cmath>
+#include <cstdio>
+#include <string>
 #include <vector>
 
 #include "shatter/fem/assembly.h"
 #include "shatter/fem/fem_model.h"
 #include "shatter/mesh/generate.h"
+#include "shatter/solve/static_solver.h"
 
 namespace shatter::test {
 
@@ -39,6 +42,17 @@ std::vector<Vec3> face_load(const TetMesh& mesh, OnFace&& on_face, const Vec3& t
       for (int k = 0; k < 3; ++k) f[t[face[k]]] += traction * (area / 3.0);
     }
   return f;
+}
+
+/// The relative residuals of a Newton history, " 1.00e+00 2.53e-03 ..." (for messages and logs).
+inline std::string residual_trace(const std::vector<NewtonIteration>& history) {
+  std::string trace;
+  for (const NewtonIteration& it : history) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, " %.2e", it.relative_residual);
+    trace += buf;
+  }
+  return trace;
 }
 
 }  // namespace shatter::test

@@ -210,12 +210,7 @@ TEST(StaticSolver, LargeDeflectionConvergesWithDefaultSettings) {
     double tip = 0;
     for (std::size_t v = 0; v < x.size(); ++v) tip = std::max(tip, c.mesh.positions[v].z() - x[v].z());
     EXPECT_GT(tip, 0.2);
-    std::string trace;
-    for (const NewtonIteration& it : r->history) {
-      char buf[32];
-      std::snprintf(buf, sizeof buf, " %.2e", it.relative_residual);
-      trace += buf;
-    }
+    const std::string trace = test::residual_trace(r->history);
     std::printf("  residual history%s\n", trace.c_str());
     if (kind != LinearSolverKind::direct_ldlt) continue;
     // Exact linear solves (the factorization), so Newton's own rate shows: from a relative residual
