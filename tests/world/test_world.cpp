@@ -256,19 +256,45 @@ TEST(World, FastThinShardDoesNotTunnel) {
   }
 }
 
-// Per step of pile_hash: the pairs the broad phase gave, and whether it kept the grid's pairs.
+// Per step of a pile's run: the pairs the broad phase gave, and whether it kept the grid's pairs.
 struct PileSteps {
   std::vector<std::int64_t> pairs;
   int grid_kept = 0;
 };
 
+// Steps `w` `steps` times on `threads` threads, noting each step's broad phase in `record` and the
+// most solve groups of a step in `most_groups` (each when given); with restore_at >= 0, restores
+// the save taken before that step, steps to the end again and expects the same state hash.
+// Returns the state hash.
+std::uint64_t run_pile(World& w, int threads, int steps, int restore_at, PileSteps* record,
+                       std::int64_t* most_groups = nullptr) {
+  const int saved_threads = num_threads();
+  set_num_threads(threads);
+  WorldSnapshot snap;
+  for (int i = 0; i < steps; ++i) {
+    if (i == restore_at) snap = w.save();
+    w.step();
+    if (most_groups != nullptr) *most_groups = std::max(*most_groups, w.stats().solve_groups);
+    if (record != nullptr) {
+      record->pairs.push_back(w.stats().body_pairs);
+      record->grid_kept += w.stats().grid_kept ? 1 : 0;
+    }
+  }
+  if (restore_at >= 0) {
+    const std::uint64_t straight = w.state_hash();
+    EXPECT_TRUE(w.restore(snap).ok());
+    for (int i = restore_at; i < steps; ++i) w.step();
+    EXPECT_EQ(w.state_hash(), straight);
+  }
+  set_num_threads(saved_threads);
+  return w.state_hash();
+}
+
 // 40 pieces dropped into a pile beside a kinematic paddle that sweeps through it (joining the
 // islands it touches), on `threads` threads, solved in groups of `group_bodies` moving bodies, the
 // broad phase's boxes grown by `growth`.
 std::uint64_t pile_hash(int threads, int steps, int restore_at, std::int64_t group_bodies = 1,
-                        double growth = WorldSettings{}.broad_phase_growth, PileSteps* record = nullptr) {
-  const int saved_threads = num_threads();
-  set_num_threads(threads);
+                        double growth = WorldSettings{}.broad_phase_growth) {
   WorldSettings settings = scenes::settings(true);
   settings.parallel_min_pairs = 1;  // every parallel loop runs parallel even in this small pile
   settings.parallel_min_bodies = 1;
@@ -290,28 +316,12 @@ std::uint64_t pile_hash(int threads, int steps, int restore_at, std::int64_t gro
     def.rigid.orientation = Quat(Eigen::AngleAxisd{rng.uniform(0, 3), rng.uniform_vec3(-1, 1).normalized()});
     (void)*w.add_body(pieces[i], def);
   }
-  WorldSnapshot snap;
   std::int64_t most_groups = 0;
-  for (int i = 0; i < steps; ++i) {
-    if (i == restore_at) snap = w.save();
-    w.step();
-    most_groups = std::max(most_groups, w.stats().solve_groups);
-    if (record != nullptr) {
-      record->pairs.push_back(w.stats().body_pairs);
-      record->grid_kept += w.stats().grid_kept ? 1 : 0;
-    }
-  }
+  const std::uint64_t hash = run_pile(w, threads, steps, restore_at, nullptr, &most_groups);
   if (group_bodies == 1) {
     EXPECT_GT(most_groups, 10);  // the islands were solved apart
   }
-  if (restore_at >= 0) {
-    const std::uint64_t straight = w.state_hash();
-    EXPECT_TRUE(w.restore(snap).ok());
-    for (int i = restore_at; i < steps; ++i) w.step();
-    EXPECT_EQ(w.state_hash(), straight);
-  }
-  set_num_threads(saved_threads);
-  return w.state_hash();
+  return hash;
 }
 
 TEST(World, StateHashIsTheSameAcrossRunsThreadCountsAndRestore) {
@@ -335,10 +345,8 @@ TEST(World, SolvingIslandsInGroupsKeepsTheBits) {
 }
 
 // 40 pieces dropped into a pile with sleeping off (every body stays awake and in the broad phase),
-// its boxes grown by `growth`; a save at `restore_at` (>= 0) restored at the end and run again.
+// its boxes grown by `growth`, run by run_pile.
 std::uint64_t settling_pile_hash(double growth, int threads, int steps, int restore_at, PileSteps& record) {
-  const int saved_threads = num_threads();
-  set_num_threads(threads);
   WorldSettings settings = scenes::settings(false);
   settings.broad_phase_growth = growth;
   World w(settings);
@@ -351,21 +359,7 @@ std::uint64_t settling_pile_hash(double growth, int threads, int steps, int rest
     def.rigid.orientation = Quat(Eigen::AngleAxisd{rng.uniform(0, 3), rng.uniform_vec3(-1, 1).normalized()});
     (void)*w.add_body(pieces[i], def);
   }
-  WorldSnapshot snap;
-  for (int i = 0; i < steps; ++i) {
-    if (i == restore_at) snap = w.save();
-    w.step();
-    record.pairs.push_back(w.stats().body_pairs);
-    record.grid_kept += w.stats().grid_kept ? 1 : 0;
-  }
-  if (restore_at >= 0) {
-    const std::uint64_t straight = w.state_hash();
-    EXPECT_TRUE(w.restore(snap).ok());
-    for (int i = restore_at; i < steps; ++i) w.step();
-    EXPECT_EQ(w.state_hash(), straight);
-  }
-  set_num_threads(saved_threads);
-  return w.state_hash();
+  return run_pile(w, threads, steps, restore_at, &record);
 }
 
 // The broad phase keeps the grid's pairs while every box stays inside its grown box, and takes
