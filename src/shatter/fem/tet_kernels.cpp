@@ -1,7 +1,6 @@
 // Constant-strain tet kernels (docs/method.md §2.2-2.3) and stress analysis helpers.
 #include "shatter/fem/tet_kernels.h"
 
-#include <immintrin.h>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
@@ -10,6 +9,7 @@
 #include <cmath>
 
 #include "shatter/core/assert.h"
+#include "shatter/core/lanes.h"
 #include "shatter/core/simd.h"
 
 namespace shatter {
@@ -217,37 +217,6 @@ Mat12 project_psd(const Mat12& K) {
 
 namespace {
 
-// GCC reports -Wpsabi for the 32-byte vectors of the always-inlined helpers below (they never cross
-// a call), after the end of the file, so it stays off for the whole of it.
-#pragma GCC diagnostic ignored "-Wpsabi"
-// Four lanes of doubles and their masks (all bits set = true), GCC vector extensions: the Jacobi
-// kernel below is compiled once for the build's baseline and once for AVX2, the same bits from both.
-typedef double JacobiLanes __attribute__((vector_size(4 * sizeof(double))));
-typedef long long JacobiMask __attribute__((vector_size(4 * sizeof(long long))));
-
-// Correctly rounded square roots, as std::sqrt: the same bits on every path. The AVX2 one is not
-// always_inline (GCC inlines it only into AVX2 code: the flattened jacobi_lanes_avx2) and returns
-// through a pointer (a 32-byte vector returned by value from AVX code to baseline code would change
-// the ABI).
-[[gnu::target("avx2")]] inline void lane_sqrt_avx2(const JacobiLanes& x, JacobiLanes* out) {
-  *out = reinterpret_cast<JacobiLanes>(_mm256_sqrt_pd(reinterpret_cast<__m256d>(x)));
-}
-[[gnu::always_inline]] inline void lane_sqrt_baseline(const JacobiLanes& x, JacobiLanes* out) {
-  const __m128d lo = _mm_sqrt_pd(_mm_set_pd(x[1], x[0]));
-  const __m128d hi = _mm_sqrt_pd(_mm_set_pd(x[3], x[2]));
-  *out = JacobiLanes{lo[0], lo[1], hi[0], hi[1]};
-}
-template <bool kAvx2>
-[[gnu::always_inline]] inline JacobiLanes lane_sqrt(const JacobiLanes& x) {
-  JacobiLanes out;
-  if constexpr (kAvx2) {
-    lane_sqrt_avx2(x, &out);
-  } else {
-    lane_sqrt_baseline(x, &out);
-  }
-  return out;
-}
-
 // Cyclic Jacobi (Golub & Van Loan, Alg. 8.5.2) on the six entries of four symmetric matrices at
 // once: zero each off-diagonal entry in turn until they are negligible against the diagonal. A
 // diagonal input takes no rotation at all. The rotation of plane (p, q) changes a_pp, a_qq, a_pq
@@ -258,7 +227,7 @@ template <bool kAvx2>
 // gets the bits it would get alone. Reads the upper triangles of in[0..n); writes out[0..n).
 template <bool kAvx2>
 [[gnu::always_inline]] inline void jacobi_lanes(const Mat3* const* in, Principal* const* out, int n) {
-  JacobiLanes d[3], o[3], v[3][3];  // diagonal; off-diagonal (0,1), (0,2), (1,2); v[row][column]
+  Lanes d[3], o[3], v[3][3];  // diagonal; off-diagonal (0,1), (0,2), (1,2); v[row][column]
   for (int l = 0; l < 4; ++l) {
     const Mat3 m = l < n ? *in[l] : Mat3::Zero();  // a zero matrix is done at once
     d[0][l] = m(0, 0), d[1][l] = m(1, 1), d[2][l] = m(2, 2);
@@ -269,39 +238,39 @@ template <bool kAvx2>
   // Plane k of a sweep is (p, q); with r the third index, a_rp and a_rq are o[kRp[k]], o[kRq[k]].
   constexpr int kP[3] = {0, 0, 1}, kQ[3] = {1, 2, 2};
   constexpr int kRp[3] = {1, 0, 0}, kRq[3] = {2, 2, 1};
-  const auto any = [](const JacobiMask& m) { return (m[0] | m[1] | m[2] | m[3]) != 0; };
-  const JacobiLanes one = {1.0, 1.0, 1.0, 1.0};
-  JacobiMask done = {0, 0, 0, 0};
+  const auto any = [](const LaneMask& m) { return (m[0] | m[1] | m[2] | m[3]) != 0; };
+  const Lanes one = {1.0, 1.0, 1.0, 1.0};
+  LaneMask done = {0, 0, 0, 0};
   for (int sweep = 0; sweep < 32; ++sweep) {
-    const JacobiLanes off = o[0] * o[0] + o[1] * o[1] + o[2] * o[2];
-    const JacobiLanes scale = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + 2.0 * off;
+    const Lanes off = o[0] * o[0] + o[1] * o[1] + o[2] * o[2];
+    const Lanes scale = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + 2.0 * off;
     done = done | (off == 0.0) | (off <= 1e-36 * scale);
     if (!any(~done)) break;
     for (int k = 0; k < 3; ++k) {
       const int p = kP[k], q = kQ[k], rp = kRp[k], rq = kRq[k];
-      const JacobiLanes apq = o[k];
-      const JacobiMask active = ~done & (apq != 0.0);
+      const Lanes apq = o[k];
+      const LaneMask active = ~done & (apq != 0.0);
       if (!any(active)) continue;
       // t = tan(phi), the smaller root of t^2 + 2 theta t - 1 = 0, theta = (a_qq - a_pp) / (2 a_pq);
       // then c = 1 / r and tau = s / (1 + c) = t / (r + 1) with r = sqrt(1 + t^2).
-      const JacobiLanes theta = (d[q] - d[p]) / (2.0 * (active ? apq : one));
-      const JacobiLanes abs_theta = theta < 0.0 ? -theta : theta;
-      const JacobiLanes root_theta = theta * theta + 1.0;
-      const JacobiLanes sign = theta >= 0.0 ? one : -one;
+      const Lanes theta = (d[q] - d[p]) / (2.0 * (active ? apq : one));
+      const Lanes abs_theta = theta < 0.0 ? -theta : theta;
+      const Lanes root_theta = theta * theta + 1.0;
+      const Lanes sign = theta >= 0.0 ? one : -one;
       // Past 1e150, theta^2 would overflow: t = 1 / (2 theta) to round-off there.
-      const JacobiLanes t = abs_theta > 1e150 ? 0.5 / theta : sign / (abs_theta + lane_sqrt<kAvx2>(root_theta));
-      const JacobiLanes r = lane_sqrt<kAvx2>(t * t + 1.0);
-      const JacobiLanes c = 1.0 / r;
-      const JacobiLanes sn = t * c;
-      const JacobiLanes tau = t / (r + 1.0);
+      const Lanes t = abs_theta > 1e150 ? 0.5 / theta : sign / (abs_theta + lane_sqrt<kAvx2>(root_theta));
+      const Lanes r = lane_sqrt<kAvx2>(t * t + 1.0);
+      const Lanes c = 1.0 / r;
+      const Lanes sn = t * c;
+      const Lanes tau = t / (r + 1.0);
       d[p] = active ? d[p] - t * apq : d[p];
       d[q] = active ? d[q] + t * apq : d[q];
-      o[k] = active ? JacobiLanes{} : apq;
-      const JacobiLanes a_rp = o[rp], a_rq = o[rq];
+      o[k] = active ? Lanes{} : apq;
+      const Lanes a_rp = o[rp], a_rq = o[rq];
       o[rp] = active ? a_rp - sn * (a_rq + tau * a_rp) : a_rp;
       o[rq] = active ? a_rq + sn * (a_rp - tau * a_rq) : a_rq;
       for (auto& row : v) {
-        const JacobiLanes vp = row[p], vq = row[q];
+        const Lanes vp = row[p], vq = row[q];
         row[p] = active ? vp - sn * (vq + tau * vp) : vp;
         row[q] = active ? vq + sn * (vp - tau * vq) : vq;
       }

@@ -2,23 +2,17 @@
 #include "shatter/rigid/contact_batches.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
+#include "shatter/core/lanes.h"
 #include "shatter/core/simd.h"
 
 namespace shatter {
 
-// Four values, one per constraint of a batch (GCC vector extension; with -ffp-contract=off each lane
-// is computed exactly as the scalar formula would be, so the baseline and AVX2 versions give the same
-// bits). Vectors live only inside the passes and in WideContact; the always-inlined helpers take
-// them by reference, and the small ones that return a vector are always inlined, so none crosses a
-// call (GCC's -Wpsabi warns about that ABI).
-// GCC reports -Wpsabi after the end of the file, so it stays off for the whole of it.
-#pragma GCC diagnostic ignored "-Wpsabi"
-// Aligned to 32 bytes everywhere: without AVX the baseline ABI would give such vectors 16, while the
-// AVX2 code loads them with aligned 32-byte moves.
-typedef double Lanes __attribute__((vector_size(ContactBatches::kLanes * sizeof(double)), aligned(32)));
-typedef long long LaneMask __attribute__((vector_size(ContactBatches::kLanes * sizeof(long long)), aligned(32)));
+// Four values per field, one per constraint of a batch (core/lanes.h: the baseline and AVX2 passes
+// give the same bits). Vectors live only inside the passes and in WideContact.
+static_assert(ContactBatches::kLanes == 4);
 
 namespace {
 
@@ -69,6 +63,13 @@ void set_lane(Lane3& to, int lane, const Vec3& v) {
   to.z[lane] = v.z();
 }
 Vec3 get_lane(const Lane3& from, int lane) { return {from.x[lane], from.y[lane], from.z[lane]}; }
+
+// Four vectors as lanes, built in registers. (Written lane by lane, a vector goes through memory, and
+// loading it waits for its four scalar stores: that wait was the passes' largest cost.)
+[[gnu::always_inline]] inline Lane3 gather(const Vec3& v0, const Vec3& v1, const Vec3& v2, const Vec3& v3) {
+  return {Lanes{v0.x(), v1.x(), v2.x(), v3.x()}, Lanes{v0.y(), v1.y(), v2.y(), v3.y()},
+          Lanes{v0.z(), v1.z(), v2.z(), v3.z()}};
+}
 
 // Lane `lane` of w from constraint c.
 void pack(const ContactConstraint& c, std::span<const SolverBody> bodies, int lane, WideContact& w) {
@@ -141,14 +142,18 @@ struct WideMotion {
   Lane3 va, wa, vb, wb;
 
   [[gnu::always_inline]] WideMotion(const WideContact& w, std::span<const SolverBody> bodies) {
-    for (int l = 0; l < ContactBatches::kLanes; ++l) {
-      const SolverBody& a = bodies[w.body_a[l]];
-      const SolverBody& b = bodies[w.body_b[l]];
-      set_lane(va, l, a.linear_velocity);
-      set_lane(wa, l, a.angular_velocity);
-      set_lane(vb, l, b.linear_velocity);
-      set_lane(wb, l, b.angular_velocity);
-    }
+    const SolverBody& a0 = bodies[w.body_a[0]];
+    const SolverBody& a1 = bodies[w.body_a[1]];
+    const SolverBody& a2 = bodies[w.body_a[2]];
+    const SolverBody& a3 = bodies[w.body_a[3]];
+    const SolverBody& b0 = bodies[w.body_b[0]];
+    const SolverBody& b1 = bodies[w.body_b[1]];
+    const SolverBody& b2 = bodies[w.body_b[2]];
+    const SolverBody& b3 = bodies[w.body_b[3]];
+    va = gather(a0.linear_velocity, a1.linear_velocity, a2.linear_velocity, a3.linear_velocity);
+    wa = gather(a0.angular_velocity, a1.angular_velocity, a2.angular_velocity, a3.angular_velocity);
+    vb = gather(b0.linear_velocity, b1.linear_velocity, b2.linear_velocity, b3.linear_velocity);
+    wb = gather(b0.angular_velocity, b1.angular_velocity, b2.angular_velocity, b3.angular_velocity);
   }
 
   [[gnu::always_inline]] void store(const WideContact& w, std::span<SolverBody> bodies) const {
@@ -241,19 +246,23 @@ struct PassArgs {
 };
 
 // solve_contact on four constraints.
+template <bool kAvx2>
 [[gnu::always_inline]] inline void solve_wide(WideContact& w, std::span<SolverBody> bodies, const PassArgs& args) {
   WideMotion m(w, bodies);
   // The normal in each body's frame and the gap between the centres along it, lane by lane.
-  Lane3 normal_in_a, normal_in_b;
-  Lanes centre_gap;
+  std::array<Vec3, ContactBatches::kLanes> in_a, in_b;
+  std::array<double, ContactBatches::kLanes> gaps;
   for (int l = 0; l < ContactBatches::kLanes; ++l) {
     const SolverBody& a = bodies[w.body_a[l]];
     const SolverBody& b = bodies[w.body_b[l]];
     const Vec3 n = get_lane(w.normal, l);
-    set_lane(normal_in_a, l, a.rotation.transpose() * n);
-    set_lane(normal_in_b, l, b.rotation.transpose() * n);
-    centre_gap[l] = n.dot(b.position) - n.dot(a.position);
+    in_a[l] = a.rotation.transpose() * n;
+    in_b[l] = b.rotation.transpose() * n;
+    gaps[l] = n.dot(b.position) - n.dot(a.position);
   }
+  const Lane3 normal_in_a = gather(in_a[0], in_a[1], in_a[2], in_a[3]);
+  const Lane3 normal_in_b = gather(in_b[0], in_b[1], in_b[2], in_b[3]);
+  const Lanes centre_gap = {gaps[0], gaps[1], gaps[2], gaps[3]};
   const Lanes zero = Lanes{} * 0.0;
   const Lanes one = zero + 1.0;
   const Lanes inverse_h = zero + args.inverse_h;
@@ -308,8 +317,7 @@ struct PassArgs {
     Lanes next1 = w.friction_impulse[1] - (w.tangent_mass[1][0] * vt0 + w.tangent_mass[1][1] * vt1);
     const Lanes limit = w.friction * total_normal;
     const Lanes squared = next0 * next0 + next1 * next1;
-    Lanes norm;
-    for (int l = 0; l < ContactBatches::kLanes; ++l) norm[l] = std::sqrt(squared[l]);
+    const Lanes norm = lane_sqrt<kAvx2>(squared);
     const Lanes scale = norm > zero ? limit / norm : zero;  // lanes with norm 0 never use the quotient
     const LaneMask over = norm > limit;
     next0 = over ? next0 * scale : next0;
@@ -342,10 +350,10 @@ void measure_approach_baseline(std::span<WideContact> batches, std::span<const S
 }
 [[gnu::target("avx2")]] void solve_avx2(std::span<WideContact> batches, std::span<SolverBody> bodies,
                                         const PassArgs& args) {
-  for (WideContact& w : batches) solve_wide(w, bodies, args);
+  for (WideContact& w : batches) solve_wide<true>(w, bodies, args);
 }
 void solve_baseline(std::span<WideContact> batches, std::span<SolverBody> bodies, const PassArgs& args) {
-  for (WideContact& w : batches) solve_wide(w, bodies, args);
+  for (WideContact& w : batches) solve_wide<false>(w, bodies, args);
 }
 
 }  // namespace

@@ -8,20 +8,16 @@
 #include <limits>
 
 #include "shatter/core/assert.h"
+#include "shatter/core/lanes.h"
 #include "shatter/core/simd.h"
 
 namespace shatter {
 
-// The drift's arithmetic is written once, over a number type T: double for one body, Lanes for four
-// bodies side by side (integrate_positions). Both run the same operations in the same order, none
-// fused (-ffp-contract=off), so four at a time gives the bits of one at a time.
-// GCC reports -Wpsabi (vectors returned by the always-inlined helpers) after the end of the file, so
-// it stays off for the whole of it.
-#pragma GCC diagnostic ignored "-Wpsabi"
+// The drift's arithmetic is written once, over a number type T: double for one body, PlainLanes
+// (core/lanes.h) for four bodies side by side (integrate_positions). Both run the same operations in
+// the same order, none fused (-ffp-contract=off), so four at a time gives the bits of one at a time.
 // The vectors live only in the locals of one function (drift_lanes, compiled once per instruction
 // set), never in memory another function reads, so their alignment may follow the instruction set.
-typedef double Lanes __attribute__((vector_size(4 * sizeof(double))));
-typedef long long LaneMask __attribute__((vector_size(4 * sizeof(long long))));
 
 namespace {
 
@@ -69,13 +65,18 @@ SHATTER_INLINE V3<T> mul_transposed(const M3<T>& m, const V3<T>& v) {
   return {m.m[0][0] * v.x + m.m[1][0] * v.y + m.m[2][0] * v.z, m.m[0][1] * v.x + m.m[1][1] * v.y + m.m[2][1] * v.z,
           m.m[0][2] * v.x + m.m[1][2] * v.y + m.m[2][2] * v.z};
 }
-SHATTER_INLINE double root(double x) { return std::sqrt(x); }
-SHATTER_INLINE Lanes root(const Lanes& x) {
-  return Lanes{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
+// Correctly rounded square roots; kAvx2 tells the lanes' version which instructions the caller uses.
+template <bool kAvx2>
+SHATTER_INLINE double root(double x) {
+  return std::sqrt(x);
 }
-template <class T>
+template <bool kAvx2>
+SHATTER_INLINE PlainLanes root(const PlainLanes& x) {
+  return lane_sqrt<kAvx2>(x);
+}
+template <bool kAvx2, class T>
 SHATTER_INLINE Q4<T> normalized(const Q4<T>& q) {
-  const T n = root(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
+  const T n = root<kAvx2>(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
   return {q.w / n, q.x / n, q.y / n, q.z / n};
 }
 // a * conj(b)
@@ -106,10 +107,10 @@ SHATTER_INLINE M3<T> rotation_matrix(const Q4<T>& q) {
 
 // The Cayley rotation of the midpoint rule for angular velocity w over dt, as a unit quaternion:
 // L_b' = q L_b solves (I + dt/2 [w]) L_b' = (I - dt/2 [w]) L_b (see integrate.h).
-template <class T>
+template <bool kAvx2, class T>
 SHATTER_INLINE Q4<T> cayley_step(const V3<T>& w, double dt) {
   const V3<T> b = (-0.5 * dt) * w;
-  return normalized(Q4<T>{T{} + 1.0, b.x, b.y, b.z});
+  return normalized<kAvx2>(Q4<T>{T{} + 1.0, b.x, b.y, b.z});
 }
 
 // The same rotation applied to v without forming the unit quaternion (no square root): with
@@ -140,11 +141,11 @@ SHATTER_INLINE V3<T> iterate(const M3<T>& inverse_inertia, const V3<T>& l_body, 
   return next;
 }
 // After the midpoint velocity w: the body momentum and the orientation turned by the Cayley step.
-template <class T>
+template <bool kAvx2, class T>
 SHATTER_INLINE void finish_rotation(const V3<T>& w, double dt, Q4<T>& q, V3<T>& l_body) {
-  const Q4<T> step = cayley_step(w, dt);
+  const Q4<T> step = cayley_step<kAvx2>(w, dt);
   l_body = turn(step, l_body);
-  q = normalized(times_conjugate(q, step));
+  q = normalized<kAvx2>(times_conjugate(q, step));
 }
 
 // Body-frame midpoint angular velocity of the torque-free step: the fixed point of
@@ -171,7 +172,7 @@ void rotate(const M3<double>& inverse_inertia, Q4<double>& q, V3<double>& l_body
     rotate(inverse_inertia, q, l_body, 0.5 * dt, depth + 1);
     return;
   }
-  finish_rotation(w, dt, q, l_body);
+  finish_rotation<false>(w, dt, q, l_body);
 }
 
 M3<double> to_m3(const Mat3& a) {
@@ -271,44 +272,56 @@ namespace {
 // Four dynamic, spinning bodies at once: integrate_position's rotation part lane by lane, each lane
 // iterating until it converges (converged lanes keep their value). Returns a mask of the lanes whose
 // fixed point did not converge at full length; their outputs are not written.
+template <bool kAvx2>
 SHATTER_INLINE int drift_lanes(std::span<const RigidInertia* const> inertia, std::span<RigidState* const> states,
                                double dt, std::span<Mat3* const> rotations) {
-  M3<Lanes> inertia_body{}, inverse_inertia{};
-  Q4<Lanes> q{};
-  V3<Lanes> w_world{};
+  // Empty lanes repeat the first body and are not written. Each vector is built in registers from
+  // its four values (written lane by lane it would go through memory, and reading it back would wait
+  // for the four stores).
   const int n = static_cast<int>(states.size());
+  std::array<const RigidInertia*, 4> in{};
+  std::array<const RigidState*, 4> of{};
   for (int l = 0; l < 4; ++l) {
-    const int k = l < n ? l : 0;  // empty lanes repeat the first body and are not written
-    const RigidInertia& in = *inertia[static_cast<std::size_t>(k)];
-    const RigidState& st = *states[static_cast<std::size_t>(k)];
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) {
-        inertia_body.m[i][j][l] = in.inertia_body(i, j);
-        inverse_inertia.m[i][j][l] = in.inverse_inertia_body(i, j);
-      }
-    q.w[l] = st.orientation.w();
-    q.x[l] = st.orientation.x();
-    q.y[l] = st.orientation.y();
-    q.z[l] = st.orientation.z();
-    w_world.x[l] = st.angular_velocity.x();
-    w_world.y[l] = st.angular_velocity.y();
-    w_world.z[l] = st.angular_velocity.z();
+    const auto k = static_cast<std::size_t>(l < n ? l : 0);
+    in[static_cast<std::size_t>(l)] = inertia[k];
+    of[static_cast<std::size_t>(l)] = states[k];
   }
-  V3<Lanes> l_body = body_momentum(inertia_body, q, w_world);
-  V3<Lanes> w = first_guess(inverse_inertia, l_body, dt);
-  LaneMask done{};  // all false
+  auto matrix = [&](Mat3 RigidInertia::* member) {
+    M3<PlainLanes> m;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        m.m[i][j] =
+            PlainLanes{(in[0]->*member)(i, j), (in[1]->*member)(i, j), (in[2]->*member)(i, j), (in[3]->*member)(i, j)};
+    return m;
+  };
+  const M3<PlainLanes> inertia_body = matrix(&RigidInertia::inertia_body);
+  const M3<PlainLanes> inverse_inertia = matrix(&RigidInertia::inverse_inertia_body);
+  Q4<PlainLanes> q{
+      PlainLanes{of[0]->orientation.w(), of[1]->orientation.w(), of[2]->orientation.w(), of[3]->orientation.w()},
+      PlainLanes{of[0]->orientation.x(), of[1]->orientation.x(), of[2]->orientation.x(), of[3]->orientation.x()},
+      PlainLanes{of[0]->orientation.y(), of[1]->orientation.y(), of[2]->orientation.y(), of[3]->orientation.y()},
+      PlainLanes{of[0]->orientation.z(), of[1]->orientation.z(), of[2]->orientation.z(), of[3]->orientation.z()}};
+  const V3<PlainLanes> w_world{PlainLanes{of[0]->angular_velocity.x(), of[1]->angular_velocity.x(),
+                                          of[2]->angular_velocity.x(), of[3]->angular_velocity.x()},
+                               PlainLanes{of[0]->angular_velocity.y(), of[1]->angular_velocity.y(),
+                                          of[2]->angular_velocity.y(), of[3]->angular_velocity.y()},
+                               PlainLanes{of[0]->angular_velocity.z(), of[1]->angular_velocity.z(),
+                                          of[2]->angular_velocity.z(), of[3]->angular_velocity.z()}};
+  V3<PlainLanes> l_body = body_momentum(inertia_body, q, w_world);
+  V3<PlainLanes> w = first_guess(inverse_inertia, l_body, dt);
+  PlainLaneMask done{};  // all false
   for (int it = 0; it < kMaxIterations; ++it) {
-    Lanes change;
-    const V3<Lanes> next = iterate(inverse_inertia, l_body, dt, w, change);
+    PlainLanes change;
+    const V3<PlainLanes> next = iterate(inverse_inertia, l_body, dt, w, change);
     w.x = done ? w.x : next.x;
     w.y = done ? w.y : next.y;
     w.z = done ? w.z : next.z;
     done = done | (change <= kTolerance * dot(next, next));
     if (done[0] && done[1] && done[2] && done[3]) break;
   }
-  finish_rotation(w, dt, q, l_body);
-  M3<Lanes> turned;
-  const V3<Lanes> w_new = world_velocity(inverse_inertia, q, l_body, turned);
+  finish_rotation<kAvx2>(w, dt, q, l_body);
+  M3<PlainLanes> turned;
+  const V3<PlainLanes> w_new = world_velocity(inverse_inertia, q, l_body, turned);
   int failed = 0;
   for (int l = 0; l < n; ++l) {
     if (!done[l]) {
@@ -329,11 +342,11 @@ SHATTER_INLINE int drift_lanes(std::span<const RigidInertia* const> inertia, std
 [[gnu::target("avx2")]] int drift_lanes_avx2(std::span<const RigidInertia* const> inertia,
                                              std::span<RigidState* const> states, double dt,
                                              std::span<Mat3* const> rotations) {
-  return drift_lanes(inertia, states, dt, rotations);
+  return drift_lanes<true>(inertia, states, dt, rotations);
 }
 int drift_lanes_baseline(std::span<const RigidInertia* const> inertia, std::span<RigidState* const> states, double dt,
                          std::span<Mat3* const> rotations) {
-  return drift_lanes(inertia, states, dt, rotations);
+  return drift_lanes<false>(inertia, states, dt, rotations);
 }
 
 }  // namespace
