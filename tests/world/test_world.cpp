@@ -256,6 +256,55 @@ TEST(World, FastThinShardDoesNotTunnel) {
   }
 }
 
+// A light piece pressed hard against the ground: the press acts in every substep, as gravity does,
+// so the contact holds it (given all at the start of the step, the push sent the piece tens of
+// centimetres into the ground before the contact caught it). The soft contact yields by about
+// a / (2 pi f)^2 under an acceleration a: here 1.7 cm, a third of the piece's size.
+TEST(World, LightPiecePressedHardStaysOnTheGround) {
+  World w(scenes::settings(false));
+  add_ground(w);
+  BodyDef def;
+  def.rigid.position = Vec3(0, 0.02, 0);
+  const auto model = scenes::box_model(Vec3(0.02, 0.02, 0.02));  // 4 cm cube
+  const double mass = model->mass.mass;
+  const BodyId id = *w.add_body(model, def);
+  for (int i = 0; i < 30; ++i) w.step();    // resting
+  const double force = 1000 * 9.81 * mass;  // a thousand times its weight, 0.25 s
+  ASSERT_OK(w.press(id, w.rigid_state(id).position + Vec3(0, 0.02, 0), Vec3(0, -force, 0), 0.01, 0.25));
+  double deepest = 0;
+  for (int i = 0; i < 40; ++i) {
+    w.step();
+    for (const Vec3& x : world_positions(*w.model(id), w.rigid_state(id))) deepest = std::min(deepest, x.y());
+    ASSERT_GT(w.rigid_state(id).position.y(), 0.0) << "step " << i;
+  }
+  EXPECT_GT(deepest, -0.025);
+  EXPECT_LT(deepest, -0.005);  // it did yield: the press reached the contact
+  for (int i = 0; i < 60; ++i) w.step();
+  EXPECT_NEAR(w.rigid_state(id).position.y(), 0.02, 1e-3);  // pushed back out once released
+}
+
+// Speed limits: a body given more than max_linear_speed and more than max_rotation per substep is
+// scaled back to them in the first substep, the directions kept, and never adds energy; below them
+// nothing changes (the ball drop's bits stay those of the scenes).
+TEST(World, SpeedsAreLimited) {
+  WorldSettings settings = scenes::settings(false);
+  settings.gravity = Vec3::Zero();
+  World w(settings);
+  BodyDef def;
+  def.rigid.linear_velocity = Vec3(3000, 0, 4000);
+  def.rigid.angular_velocity = Vec3(0, 0, 9000);
+  const BodyId id = *w.add_body(scenes::box_model(Vec3(0.02, 0.03, 0.04)), def);
+  w.step();
+  const RigidState& r = w.rigid_state(id);
+  const double max_spin = settings.max_rotation * settings.substeps / settings.time_step;
+  EXPECT_NEAR(r.linear_velocity.norm(), settings.max_linear_speed, 1e-9 * settings.max_linear_speed);
+  EXPECT_LT((r.linear_velocity.normalized() - Vec3(0.6, 0, 0.8)).norm(), 1e-12);
+  EXPECT_LE(r.angular_velocity.norm(), max_spin * (1 + 1e-9));
+  EXPECT_GT(r.angular_velocity.norm(), 0.5 * max_spin);  // torque-free tumbling keeps most of it
+  // The flight covers max_linear_speed * time_step per step.
+  EXPECT_NEAR(r.position.norm(), settings.max_linear_speed * settings.time_step, 1e-6);
+}
+
 // Per step of a pile's run: the pairs the broad phase gave, and whether it kept the grid's pairs.
 struct PileSteps {
   std::vector<std::int64_t> pairs;

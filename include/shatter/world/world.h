@@ -119,6 +119,14 @@ struct WorldSettings {
   DecompositionOptions decomposition;  ///< convex pieces of tet bodies
   /// Contacts are made for gaps up to this plus the distance the pair can close within a step, m.
   double speculative_distance = 0.004;
+  /// Speed limits of dynamic rigid bodies, enforced every substep after gravity (Jolt's 500 m/s,
+  /// Box2D's quarter turn per substep). Past them the contacts, found once per step, cannot hold a
+  /// body: a small piece driven by a large tool force, spinning through turns within a step, would
+  /// pass through the ground. m/s.
+  double max_linear_speed = 500;
+  /// Largest rotation of a dynamic rigid body in one substep, rad: at 8 substeps of 1/60 s, 0.25 pi
+  /// is 377 rad/s.
+  double max_rotation = 0.25 * 3.14159265358979323846;
   /// A pair whose bodies moved less than this relative to each other since its contacts were found
   /// keeps them, moved with the bodies, instead of colliding its shapes again (Jolt's body-pair
   /// cache), m. Contacts are then made for gaps this much wider, so that none is missed meanwhile.
@@ -437,6 +445,11 @@ class World {
     bool is_plane = false;
     RigidInertia inertia;
     RigidState rigid;
+    /// The presses on a rigid body for the coming step, world frame (push_tools): applied in every
+    /// substep, as gravity is, and cleared before the next step's. N, N m.
+    Vec3 press_force = Vec3::Zero();
+    Vec3 press_torque = Vec3::Zero();
+    bool pressed = false;
     SurfaceMaterial surface;
     CollisionFilter filter;
     bool can_sleep = true;

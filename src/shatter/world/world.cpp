@@ -552,7 +552,15 @@ bool World::pair_excluded(Index a, Index b) const { return contains_pair(exclude
 double World::motion_bound(const Body& b) const {
   if (b.type == BodyType::static_body || !b.awake) return 0;
   if (b.deform) return settings_.time_step * b.deform->max_speed;
-  return settings_.time_step * (b.rigid.linear_velocity.norm() + b.rigid.angular_velocity.norm() * b.radius);
+  const double dt = settings_.time_step;
+  if (b.pressed) {  // what the press adds within the step, within the speed limits
+    const double v = b.rigid.linear_velocity.norm() + dt * b.inertia.inverse_mass * b.press_force.norm();
+    const double w = b.rigid.angular_velocity.norm() +
+                     dt * (world_inverse_inertia(b.inertia, b.rigid.orientation) * b.press_torque).norm();
+    return dt * (std::min(v, settings_.max_linear_speed) +
+                 std::min(w, settings_.max_rotation * settings_.substeps / dt) * b.radius);
+  }
+  return dt * (b.rigid.linear_velocity.norm() + b.rigid.angular_velocity.norm() * b.radius);
 }
 
 void World::find_pairs(std::vector<PairRef>& pairs) {
@@ -1042,6 +1050,8 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
   }
 
   const Vec3 dv_gravity = h * settings_.gravity;
+  const double max_speed = settings_.max_linear_speed;
+  const double max_spin = settings_.max_rotation * inverse_h;
   // Four constraints at a time, in an order that depends only on the constraints' (contact_batches.h).
   ContactBatches& batches = group.batches;
   batches.build(group.constraints, solver_bodies_);
@@ -1052,7 +1062,18 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
         0, num_moving,
         [&](std::int64_t k) {
           const Index i = moving[k];
-          if (bodies_[i].type == BodyType::dynamic) solver_bodies_[i].linear_velocity += dv_gravity;
+          if (bodies_[i].type != BodyType::dynamic) return;
+          SolverBody& s = solver_bodies_[i];
+          s.linear_velocity += dv_gravity;
+          if (const Body& b = bodies_[i]; b.pressed) {
+            s.linear_velocity += (h * s.inverse_mass) * b.press_force;
+            s.angular_velocity += s.inverse_inertia * (h * b.press_torque);
+          }
+          // Scaled back to the limits (the direction kept); below them, untouched.
+          if (const double v2 = s.linear_velocity.squaredNorm(); v2 > max_speed * max_speed)
+            s.linear_velocity *= max_speed / std::sqrt(v2);
+          if (const double w2 = s.angular_velocity.squaredNorm(); w2 > max_spin * max_spin)
+            s.angular_velocity *= max_spin / std::sqrt(w2);
         },
         settings_.parallel_min_bodies);
     batches.measure_approach(solver_bodies_);
@@ -1492,7 +1513,16 @@ Result<Index> World::slice(BodyId id, const Vec3& point, const Vec3& normal) {
 }
 
 void World::push_tools() {
-  // Presses push their bodies for the coming step (strikes pushed when given).
+  // Presses push their bodies for the coming step (strikes pushed when given). A rigid body takes
+  // the force in every substep (solve_group), as it takes gravity: all of a step's push given at
+  // once would drive a light body deep into what it is pressed against before its contacts caught
+  // it.
+  for (Body& b : bodies_)
+    if (b.pressed) {
+      b.press_force.setZero();
+      b.press_torque.setZero();
+      b.pressed = false;
+    }
   for (const Tool& t : tools_) {
     Body& b = bodies_[t.body];
     if (t.strike || b.removed || b.type != BodyType::dynamic) continue;
@@ -1504,9 +1534,9 @@ void World::push_tools() {
       wake_slot(t.body);
       continue;
     }
-    b.rigid.linear_velocity += b.inertia.inverse_mass * impulse;
-    b.rigid.angular_velocity +=
-        world_inverse_inertia(b.inertia, b.rigid.orientation) * (point - b.rigid.position).cross(impulse);
+    b.press_force += t.vector;
+    b.press_torque += (point - b.rigid.position).cross(t.vector);
+    b.pressed = true;
     wake_slot(t.body);
   }
 }
