@@ -284,8 +284,7 @@ TEST(World, LightPiecePressedHardStaysOnTheGround) {
 }
 
 // Speed limits: a body given more than max_linear_speed and more than max_rotation per substep is
-// scaled back to them in the first substep, the directions kept, and never adds energy; below them
-// nothing changes (the ball drop's bits stay those of the scenes).
+// scaled back to them in the first substep, the linear direction kept.
 TEST(World, SpeedsAreLimited) {
   WorldSettings settings = scenes::settings(false);
   settings.gravity = Vec3::Zero();

@@ -17,6 +17,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <span>
 #include <vector>
@@ -122,11 +123,11 @@ struct WorldSettings {
   /// Speed limits of dynamic rigid bodies, enforced every substep after gravity (Jolt's 500 m/s,
   /// Box2D's quarter turn per substep). Past them the contacts, found once per step, cannot hold a
   /// body: a small piece driven by a large tool force, spinning through turns within a step, would
-  /// pass through the ground. m/s.
+  /// pass through the ground. m/s, > 0 (infinity: no limit).
   double max_linear_speed = 500;
-  /// Largest rotation of a dynamic rigid body in one substep, rad: at 8 substeps of 1/60 s, 0.25 pi
-  /// is 377 rad/s.
-  double max_rotation = 0.25 * 3.14159265358979323846;
+  /// Largest rotation of a dynamic rigid body in one substep, rad, > 0: at 8 substeps of 1/60 s,
+  /// 0.25 pi is 377 rad/s.
+  double max_rotation = 0.25 * std::numbers::pi;
   /// A pair whose bodies moved less than this relative to each other since its contacts were found
   /// keeps them, moved with the bodies, instead of colliding its shapes again (Jolt's body-pair
   /// cache), m. Contacts are then made for gaps this much wider, so that none is missed meanwhile.

@@ -279,34 +279,37 @@ SHATTER_INLINE int drift_lanes(std::span<const RigidInertia* const> inertia, std
   // its four values (written lane by lane it would go through memory, and reading it back would wait
   // for the four stores).
   const int n = static_cast<int>(states.size());
-  std::array<const RigidInertia*, 4> in{};
-  std::array<const RigidState*, 4> of{};
+  std::array<const RigidInertia*, 4> inertia_of{};
+  std::array<const RigidState*, 4> state_of{};
   for (int l = 0; l < 4; ++l) {
     const auto k = static_cast<std::size_t>(l < n ? l : 0);
-    in[static_cast<std::size_t>(l)] = inertia[k];
-    of[static_cast<std::size_t>(l)] = states[k];
+    inertia_of[static_cast<std::size_t>(l)] = inertia[k];
+    state_of[static_cast<std::size_t>(l)] = states[k];
   }
   auto matrix = [&](Mat3 RigidInertia::* member) {
     M3<PlainLanes> m;
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j)
-        m.m[i][j] =
-            PlainLanes{(in[0]->*member)(i, j), (in[1]->*member)(i, j), (in[2]->*member)(i, j), (in[3]->*member)(i, j)};
+        m.m[i][j] = PlainLanes{(inertia_of[0]->*member)(i, j), (inertia_of[1]->*member)(i, j),
+                               (inertia_of[2]->*member)(i, j), (inertia_of[3]->*member)(i, j)};
     return m;
   };
   const M3<PlainLanes> inertia_body = matrix(&RigidInertia::inertia_body);
   const M3<PlainLanes> inverse_inertia = matrix(&RigidInertia::inverse_inertia_body);
-  Q4<PlainLanes> q{
-      PlainLanes{of[0]->orientation.w(), of[1]->orientation.w(), of[2]->orientation.w(), of[3]->orientation.w()},
-      PlainLanes{of[0]->orientation.x(), of[1]->orientation.x(), of[2]->orientation.x(), of[3]->orientation.x()},
-      PlainLanes{of[0]->orientation.y(), of[1]->orientation.y(), of[2]->orientation.y(), of[3]->orientation.y()},
-      PlainLanes{of[0]->orientation.z(), of[1]->orientation.z(), of[2]->orientation.z(), of[3]->orientation.z()}};
-  const V3<PlainLanes> w_world{PlainLanes{of[0]->angular_velocity.x(), of[1]->angular_velocity.x(),
-                                          of[2]->angular_velocity.x(), of[3]->angular_velocity.x()},
-                               PlainLanes{of[0]->angular_velocity.y(), of[1]->angular_velocity.y(),
-                                          of[2]->angular_velocity.y(), of[3]->angular_velocity.y()},
-                               PlainLanes{of[0]->angular_velocity.z(), of[1]->angular_velocity.z(),
-                                          of[2]->angular_velocity.z(), of[3]->angular_velocity.z()}};
+  Q4<PlainLanes> q{PlainLanes{state_of[0]->orientation.w(), state_of[1]->orientation.w(), state_of[2]->orientation.w(),
+                              state_of[3]->orientation.w()},
+                   PlainLanes{state_of[0]->orientation.x(), state_of[1]->orientation.x(), state_of[2]->orientation.x(),
+                              state_of[3]->orientation.x()},
+                   PlainLanes{state_of[0]->orientation.y(), state_of[1]->orientation.y(), state_of[2]->orientation.y(),
+                              state_of[3]->orientation.y()},
+                   PlainLanes{state_of[0]->orientation.z(), state_of[1]->orientation.z(), state_of[2]->orientation.z(),
+                              state_of[3]->orientation.z()}};
+  const V3<PlainLanes> w_world{PlainLanes{state_of[0]->angular_velocity.x(), state_of[1]->angular_velocity.x(),
+                                          state_of[2]->angular_velocity.x(), state_of[3]->angular_velocity.x()},
+                               PlainLanes{state_of[0]->angular_velocity.y(), state_of[1]->angular_velocity.y(),
+                                          state_of[2]->angular_velocity.y(), state_of[3]->angular_velocity.y()},
+                               PlainLanes{state_of[0]->angular_velocity.z(), state_of[1]->angular_velocity.z(),
+                                          state_of[2]->angular_velocity.z(), state_of[3]->angular_velocity.z()}};
   V3<PlainLanes> l_body = body_momentum(inertia_body, q, w_world);
   V3<PlainLanes> w = first_guess(inverse_inertia, l_body, dt);
   PlainLaneMask done{};  // all false

@@ -140,6 +140,8 @@ struct World::State {
 };
 
 World::World(const WorldSettings& settings) : settings_(settings) {
+  // A negative limit would turn bodies around, NaN would not limit at all.
+  SHATTER_CHECK(settings.max_linear_speed > 0 && settings.max_rotation > 0);
   static std::atomic<std::uint64_t> next_id{1};
   world_id_ = next_id.fetch_add(1);
 }
