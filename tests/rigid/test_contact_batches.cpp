@@ -58,10 +58,6 @@ Problem random_setup(int n_bodies, int n_constraints, std::uint64_t seed) {
     for (int i = 0; i < c.count; ++i) {
       ContactPoint& p = c.points[i];
       p.position = 0.5 * (a.position + b.position) + rng.uniform_vec3(-0.1, 0.1);
-      p.anchor_a = p.position - a.position;
-      p.anchor_b = p.position - b.position;
-      p.local_anchor_a = a.rotation.transpose() * p.anchor_a;
-      p.local_anchor_b = b.rotation.transpose() * p.anchor_b;
       p.separation = rng.uniform(-0.01, 0.005);
       p.normal_impulse = rng.uniform(0, 0.5);  // warm start
     }

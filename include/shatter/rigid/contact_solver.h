@@ -51,13 +51,22 @@ struct SolverBody {
 
 /// One point of a contact constraint.
 struct ContactPoint {
-  Vec3 position = Vec3::Zero();        ///< world point at the start of the step, m
-  Vec3 anchor_a = Vec3::Zero();        ///< world offset from A's centre of mass at the start, m
-  Vec3 anchor_b = Vec3::Zero();        ///< the same for B
-  Vec3 local_anchor_a = Vec3::Zero();  ///< the point in A's frame (world point for a static A)
-  Vec3 local_anchor_b = Vec3::Zero();  ///< the point in B's frame
-  double separation = 0;               ///< along the normal at the start of the step, m (< 0 overlap)
-  double normal_mass = 0;              ///< effective mass along the normal, kg
+  /// World point at the start of the step, midway across the gap between the surfaces, m.
+  Vec3 position = Vec3::Zero();
+  double separation = 0;  ///< along the normal at the start of the step, m (< 0 overlap)
+  // Set by prepare_contact from position and separation:
+  Vec3 anchor_a = Vec3::Zero();  ///< position's world offset from A's centre of mass, m (the rows' lever arm)
+  Vec3 anchor_b = Vec3::Zero();  ///< the same for B
+  /// The point of A's surface, position - separation/2 normal, in A's frame (a world point for a
+  /// static A), m. The solver follows the separation with the two surface points: position itself
+  /// lies up to half a speculative gap off each body, and a spinning body would carry that point,
+  /// not its surface.
+  Vec3 local_anchor_a = Vec3::Zero();
+  Vec3 local_anchor_b = Vec3::Zero();  ///< B's point, position + separation/2 normal, in B's frame
+  /// separation - n . (on_B - on_A) at the start, from the surface points as stored (round-off):
+  /// the separation now is n . (on_B - on_A) now plus this (Box2D's adjusted separation), m.
+  double adjusted_separation = 0;
+  double normal_mass = 0;  ///< effective mass along the normal, kg
   // The normal row's Jacobian and response, fixed over the step (the anchors and the world inverse
   // inertias are): v_n = n . (v_B - v_A) + rn_b . w_B - rn_a . w_A, and an impulse l n turns
   // A by -l ang_a and B by +l ang_b.
@@ -119,8 +128,8 @@ struct ContactSolverSettings {
   double restitution_threshold = 1;  ///< approach speed below which contacts do not bounce, m/s
 };
 
-/// Fill the constraint's derived data once per step, from points whose position, anchors and
-/// separation the caller set: tangents, friction centre, effective masses, approach speeds. Keeps
+/// Fill the constraint's derived data once per step, from points whose position and separation
+/// the caller set: anchors, tangents, friction centre, effective masses, approach speeds. Keeps
 /// the warm-start impulses the caller put in and zeroes the step totals. `speculative_distance`
 /// (m) fades points with a gap out of the friction centre.
 void prepare_contact(ContactConstraint& c, std::span<const SolverBody> bodies, double speculative_distance);

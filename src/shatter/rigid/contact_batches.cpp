@@ -28,7 +28,7 @@ static_assert(alignof(Lanes) == 32 && alignof(Lane3) == 32);
 // One point slot of four constraints (zeros where a constraint has fewer points: no mass, no
 // impulse). The fields are those of ContactPoint the passes read or write.
 struct WidePoint {
-  Lanes separation;
+  Lanes adjusted_separation;
   Lane3 local_anchor_a, local_anchor_b;
   Lane3 rn_a, rn_b, ang_a, ang_b;
   Lanes normal_mass, normal_impulse, lever_arm, approach_speed, max_normal_impulse, total_normal_impulse;
@@ -102,7 +102,7 @@ void pack(const ContactConstraint& c, std::span<const SolverBody> bodies, int la
   for (int k = 0; k < c.count; ++k) {
     const ContactPoint& p = c.points[k];
     WidePoint& q = w.points[k];
-    q.separation[lane] = p.separation;
+    q.adjusted_separation[lane] = p.adjusted_separation;
     set_lane(q.local_anchor_a, lane, p.local_anchor_a);
     set_lane(q.local_anchor_b, lane, p.local_anchor_b);
     set_lane(q.rn_a, lane, p.rn_a);
@@ -272,7 +272,7 @@ template <bool kAvx2>
   for (int k = 0; k < w.count; ++k) {
     WidePoint& p = w.points[k];
     const Lanes s =
-        p.separation + centre_gap + (dot(normal_in_b, p.local_anchor_b) - dot(normal_in_a, p.local_anchor_a));
+        p.adjusted_separation + centre_gap + (dot(normal_in_b, p.local_anchor_b) - dot(normal_in_a, p.local_anchor_a));
     // Speculative (a gap): close it within the substep, no more; else soft push-out (biased pass)
     // or nothing (relax).
     const LaneMask gap = s > zero;

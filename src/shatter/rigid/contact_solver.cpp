@@ -118,6 +118,13 @@ void prepare_contact(ContactConstraint& c, std::span<const SolverBody> bodies, d
   double weight_sum = 0;
   for (int i = 0; i < c.count; ++i) {
     ContactPoint& p = c.points[i];
+    p.anchor_a = p.position - a.position;
+    p.anchor_b = p.position - b.position;
+    const Vec3 half_gap = 0.5 * p.separation * c.normal;
+    p.local_anchor_a = a.rotation.transpose() * (p.anchor_a - half_gap);
+    p.local_anchor_b = b.rotation.transpose() * (p.anchor_b + half_gap);
+    p.adjusted_separation = p.separation - (c.normal.dot(b.position + b.rotation * p.local_anchor_b) -
+                                            c.normal.dot(a.position + a.rotation * p.local_anchor_a));
     p.rn_a = p.anchor_a.cross(c.normal);
     p.rn_b = p.anchor_b.cross(c.normal);
     p.ang_a = a.inverse_inertia * p.rn_a;
@@ -184,8 +191,8 @@ void measure_approach(ContactConstraint& c, std::span<const SolverBody> bodies) 
 void solve_contact(ContactConstraint& c, std::span<SolverBody> bodies, double inverse_h, bool use_bias,
                    double max_push_velocity) {
   PairMotion m(c, bodies);
-  // Each point's current separation, s0 + n . (p_B - p_A) with p = x + R r_local, from the normal
-  // turned into each body's frame once per pass: n . (R r) = (R^T n) . r.
+  // Each point's current separation, n . (p_B - p_A) + adjusted with p = x + R r_local the surface
+  // points, from the normal turned into each body's frame once per pass: n . (R r) = (R^T n) . r.
   const SolverBody& a = bodies[c.body_a];
   const SolverBody& b = bodies[c.body_b];
   const Vec3 normal_in_a = a.rotation.transpose() * c.normal;
@@ -196,7 +203,7 @@ void solve_contact(ContactConstraint& c, std::span<SolverBody> bodies, double in
   for (int i = 0; i < c.count; ++i) {
     ContactPoint& p = c.points[i];
     const double s =
-        p.separation + centre_gap + (normal_in_b.dot(p.local_anchor_b) - normal_in_a.dot(p.local_anchor_a));
+        p.adjusted_separation + centre_gap + (normal_in_b.dot(p.local_anchor_b) - normal_in_a.dot(p.local_anchor_a));
     if (s > 0) {
       solve_normal(c, p, m, s * inverse_h, 1, 0);  // speculative: close the gap within the substep, no more
     } else if (use_bias) {

@@ -1039,15 +1039,6 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
     cc.friction = std::sqrt(a.surface.friction * b.surface.friction);
     cc.restitution = std::max(a.surface.restitution, b.surface.restitution);
     cc.softness = (a.type == BodyType::dynamic && b.type == BodyType::dynamic) ? soft : static_soft;
-    const SolverBody& sa = solver_bodies_[cc.body_a];
-    const SolverBody& sb = solver_bodies_[cc.body_b];
-    for (int i = 0; i < cc.count; ++i) {
-      ContactPoint& p = cc.points[i];
-      p.anchor_a = p.position - sa.position;
-      p.anchor_b = p.position - sb.position;
-      p.local_anchor_a = sa.rotation.transpose() * p.anchor_a;
-      p.local_anchor_b = sb.rotation.transpose() * p.anchor_b;
-    }
     prepare_contact(cc, solver_bodies_, settings_.speculative_distance);
   }
 
@@ -1215,11 +1206,9 @@ void World::process_impacts() {
       for (int k = 0; k < cc.count; ++k) {
         const ContactPoint& p = cc.points[k];
         if (!(p.total_normal_impulse > 0)) continue;
-        // The manifold point lies midway across the gap the step started with: move it onto each
-        // surface.
-        const Vec3 half_gap = 0.5 * std::max(p.separation, 0.0) * cc.normal;
-        const Vec3 pa = ba.rigid.position + ra * p.local_anchor_a - half_gap;
-        const Vec3 pb = bb.rigid.position + rb * p.local_anchor_b + half_gap;
+        // Each body's own surface point (the manifold point lies midway across the gap).
+        const Vec3 pa = ba.rigid.position + ra * p.local_anchor_a;
+        const Vec3 pb = bb.rigid.position + rb * p.local_anchor_b;
         still_closing = std::max(still_closing, -cc.normal.dot(velocity_at(bb, pb) - velocity_at(ba, pa)));
         e.points.push_back({.local_a = ra.transpose() * (pa - ba.rigid.position),
                             .local_b = rb.transpose() * (pb - bb.rigid.position),
