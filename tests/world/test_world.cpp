@@ -283,7 +283,7 @@ TEST(World, LightPiecePressedHardStaysOnTheGround) {
   EXPECT_NEAR(w.rigid_state(id).position.y(), 0.02, 1e-3);  // pushed back out once released
 }
 
-// Speed limits: a body given more than max_linear_speed and more than max_rotation per substep is
+// Speed limits: a body given more than max_linear_speed and more than max_rotation per step is
 // scaled back to them in the first substep, the linear direction kept.
 TEST(World, SpeedsAreLimited) {
   WorldSettings settings = scenes::settings(false);
@@ -295,7 +295,7 @@ TEST(World, SpeedsAreLimited) {
   const BodyId id = *w.add_body(scenes::box_model(Vec3(0.02, 0.03, 0.04)), def);
   w.step();
   const RigidState& r = w.rigid_state(id);
-  const double max_spin = settings.max_rotation * settings.substeps / settings.time_step;
+  const double max_spin = settings.max_rotation / settings.time_step;
   EXPECT_NEAR(r.linear_velocity.norm(), settings.max_linear_speed, 1e-9 * settings.max_linear_speed);
   EXPECT_LT((r.linear_velocity.normalized() - Vec3(0.6, 0, 0.8)).norm(), 1e-12);
   EXPECT_LE(r.angular_velocity.norm(), max_spin * (1 + 1e-9));
@@ -316,7 +316,7 @@ TEST(World, SpinningPieceThrownDownStaysAbove) {
     BodyDef def;
     def.rigid.position = Vec3(0, 0.45 + 0.01 * phase, 0);
     def.rigid.linear_velocity = Vec3(3, -25, 0);
-    def.rigid.angular_velocity = Vec3(0, 10, 90);  // within the speed limit
+    def.rigid.angular_velocity = Vec3(0, 10, 90);  // within the limit: a quarter turn per step
     def.rigid.orientation = Quat(Eigen::AngleAxisd(0.1 * phase, Vec3(1, 2, 3).normalized()));
     const BodyId id = *w.add_body(scenes::box_model(Vec3(0.05, 0.01, 0.03)), def);  // 10 x 2 x 6 cm
     double deepest = 0;

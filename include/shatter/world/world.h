@@ -120,14 +120,15 @@ struct WorldSettings {
   DecompositionOptions decomposition;  ///< convex pieces of tet bodies
   /// Contacts are made for gaps up to this plus the distance the pair can close within a step, m.
   double speculative_distance = 0.004;
-  /// Speed limits of dynamic rigid bodies, enforced every substep after gravity (Jolt's 500 m/s,
-  /// Box2D's quarter turn per substep). Past them the contacts, found once per step, cannot hold a
-  /// body: a small piece driven by a large tool force, spinning through turns within a step, would
+  /// Speed limits of dynamic rigid bodies, enforced every substep after gravity (Jolt's 500 m/s;
+  /// PhysX's 100 rad/s). Past them the contacts, found once per step, cannot hold a body: a small
+  /// piece driven by a large tool force, or spinning through most of a turn within a step, would
   /// pass through the ground. m/s, > 0 (infinity: no limit).
   double max_linear_speed = 500;
-  /// Largest rotation of a dynamic rigid body in one substep, rad, > 0: at 8 substeps of 1/60 s,
-  /// 0.25 pi is 377 rad/s.
-  double max_rotation = 0.25 * std::numbers::pi;
+  /// Largest rotation of a dynamic rigid body in one step, rad, > 0: a quarter turn, 94 rad/s at
+  /// 1/60 s. A body turning further within a step brings points into contact that the step's
+  /// manifolds, found at its start, do not hold (docs/method.md, "No tunnelling").
+  double max_rotation = 0.5 * std::numbers::pi;
   /// A pair whose bodies moved less than this relative to each other since its contacts were found
   /// keeps them, moved with the bodies, instead of colliding its shapes again (Jolt's body-pair
   /// cache), m. Contacts are then made for gaps this much wider, so that none is missed meanwhile.

@@ -559,8 +559,7 @@ double World::motion_bound(const Body& b) const {
     const double v = b.rigid.linear_velocity.norm() + dt * b.inertia.inverse_mass * b.press_force.norm();
     const double w = b.rigid.angular_velocity.norm() +
                      dt * (world_inverse_inertia(b.inertia, b.rigid.orientation) * b.press_torque).norm();
-    return dt * (std::min(v, settings_.max_linear_speed) +
-                 std::min(w, settings_.max_rotation * settings_.substeps / dt) * b.radius);
+    return dt * (std::min(v, settings_.max_linear_speed) + std::min(w, settings_.max_rotation / dt) * b.radius);
   }
   return dt * (b.rigid.linear_velocity.norm() + b.rigid.angular_velocity.norm() * b.radius);
 }
@@ -1044,7 +1043,7 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
 
   const Vec3 dv_gravity = h * settings_.gravity;
   const double max_speed = settings_.max_linear_speed;
-  const double max_spin = settings_.max_rotation * inverse_h;
+  const double max_spin = settings_.max_rotation / settings_.time_step;
   // Four constraints at a time, in an order that depends only on the constraints' (contact_batches.h).
   ContactBatches& batches = group.batches;
   batches.build(group.constraints, solver_bodies_);
