@@ -662,7 +662,9 @@ TEST(Impacts, Soak) {
                        .ok();
         } else if (kind < 2) {
           const double force = mass * 9.81 * (10 + 90 * size);
-          const double duration = std::min(0.2 * radius_or_duration, 30 * mass / force);
+          const double dt = w.settings().time_step;  // a press lasts whole steps
+          const double duration =
+              std::min(0.2 * radius_or_duration, dt * std::max(1.0, std::floor(30 * mass / force / dt)));
           blows += w.press(id, point, force * inward, 0.005 + 0.025 * speed_or_radius, duration).ok();
         } else {
           // A saw through the body's centre (a deformable body is no rigid tet body: an error).

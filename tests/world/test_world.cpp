@@ -314,6 +314,7 @@ TEST(World, SpinningPieceThrownDownStaysAbove) {
     World w(scenes::settings(false));
     add_ground(w);
     BodyDef def;
+    def.breakable = false;  // the same piece throughout
     def.rigid.position = Vec3(0, 0.45 + 0.01 * phase, 0);
     def.rigid.linear_velocity = Vec3(3, -25, 0);
     def.rigid.angular_velocity = Vec3(0, 10, 90);  // within the limit: a quarter turn per step

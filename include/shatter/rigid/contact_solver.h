@@ -57,8 +57,8 @@ struct ContactPoint {
   // Set by prepare_contact from position and separation:
   Vec3 anchor_a = Vec3::Zero();  ///< position's world offset from A's centre of mass, m (the rows' lever arm)
   Vec3 anchor_b = Vec3::Zero();  ///< the same for B
-  /// The point of A's surface, position - separation/2 normal, in A's frame (a world point for a
-  /// static A), m. The solver follows the separation with the two surface points: position itself
+  /// The point of A's surface, position - separation/2 normal, in A's frame at the step's start
+  /// (static and kinematic bodies included), m. The solver follows the separation with the two surface points: position itself
   /// lies up to half a speculative gap off each body, and a spinning body would carry that point,
   /// not its surface.
   Vec3 local_anchor_a = Vec3::Zero();

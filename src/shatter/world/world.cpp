@@ -1209,8 +1209,8 @@ void World::process_impacts() {
         const Vec3 pa = ba.rigid.position + ra * p.local_anchor_a;
         const Vec3 pb = bb.rigid.position + rb * p.local_anchor_b;
         still_closing = std::max(still_closing, -cc.normal.dot(velocity_at(bb, pb) - velocity_at(ba, pa)));
-        e.points.push_back({.local_a = ra.transpose() * (pa - ba.rigid.position),
-                            .local_b = rb.transpose() * (pb - bb.rigid.position),
+        e.points.push_back({.local_a = p.local_anchor_a,
+                            .local_b = p.local_anchor_b,
                             .normal_a = ra.transpose() * -cc.normal,
                             .normal_b = rb.transpose() * cc.normal,
                             .impulse = p.total_normal_impulse,
