@@ -531,9 +531,11 @@ TEST(Contact, BoxOnPlane) {
     ASSERT_EQ(m.count, expected);
     for (int i = 0; i < m.count; ++i) EXPECT_NEAR(m.points[static_cast<std::size_t>(i)].separation, -0.002, 1e-14);
   }
-  // Random hulls and planes: the corners within the speculative distance of the incident face (of
-  // the faces around the deepest vertex, the most anti-parallel to the plane normal), or 4 of them
-  // with the deepest.
+  // Random hulls and planes: the candidates are the corners within the speculative distance of the
+  // incident face (of the faces around the deepest vertex, the most anti-parallel to the plane
+  // normal) and every other vertex that overlaps; all of them when at most 4, else 4 chosen among
+  // those that touch (overlap, or lie within 2 % of the radius of the deepest) when at least three
+  // do, the deepest among them.
   Random rng(5);
   for (int trial = 0; trial < 300; ++trial) {
     const ConvexHull h = random_hull(rng, static_cast<int>(rng.below(6)));
@@ -557,15 +559,23 @@ TEST(Contact, BoxOnPlane) {
       }
     }
     ASSERT_GE(incident, 0);
-    std::vector<double> seps;
+    std::vector<Index> candidates;
     Index e = h.faces[static_cast<std::size_t>(incident)].edge;
     do {
-      const double s = sep_of(h.edges[static_cast<std::size_t>(e)].origin);
-      if (s <= spec) seps.push_back(s);
+      if (sep_of(h.edges[static_cast<std::size_t>(e)].origin) <= spec)
+        candidates.push_back(h.edges[static_cast<std::size_t>(e)].origin);
       e = h.edges[static_cast<std::size_t>(e)].next;
     } while (e != h.faces[static_cast<std::size_t>(incident)].edge);
+    for (Index i = 0; i < static_cast<Index>(h.vertices.size()); ++i)
+      if (sep_of(i) < 0 && std::find(candidates.begin(), candidates.end(), i) == candidates.end())
+        candidates.push_back(i);
+    std::vector<double> seps;
+    for (const Index i : candidates) seps.push_back(sep_of(i));
+    const double band = seps.empty() ? 0 : std::max(*std::min_element(seps.begin(), seps.end()) + 0.02 * h.radius, 0.0);
+    const auto touching = std::count_if(seps.begin(), seps.end(), [band](double s) { return s <= band; });
+    const bool among_touching = seps.size() > 4 && touching >= 3 && touching < static_cast<std::ptrdiff_t>(seps.size());
     const ContactManifold m = collide_hull_plane(h, t, plane, spec);
-    ASSERT_EQ(m.count, std::min<int>(4, static_cast<int>(seps.size())));
+    ASSERT_EQ(m.count, std::min<int>(4, static_cast<int>(among_touching ? touching : seps.size()))) << trial;
     EXPECT_EQ(m.normal, -plane.normal);
     double deepest = 1e300;
     for (int i = 0; i < m.count; ++i) {
@@ -573,6 +583,11 @@ TEST(Contact, BoxOnPlane) {
       const Vec3 v = t.apply(h.vertices[p.feature & 0x3fffffffu]);
       EXPECT_NEAR(p.separation, plane.normal.dot(v) - plane.offset, 1e-12);
       EXPECT_NEAR((p.point - (v - 0.5 * p.separation * plane.normal)).norm(), 0, 1e-12);
+      EXPECT_NE(std::find(candidates.begin(), candidates.end(), static_cast<Index>(p.feature & 0x3fffffffu)),
+                candidates.end());
+      if (among_touching) {
+        EXPECT_LE(p.separation, band + 1e-12);
+      }
       deepest = std::min(deepest, p.separation);
     }
     if (m.count > 0) {

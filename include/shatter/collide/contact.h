@@ -91,17 +91,19 @@ double hull_separation(const ConvexHull& a, const Transform& ta, const ConvexHul
 
 /// Contact between a hull (A) and a plane (B), as a face contact: the incident face is, of the
 /// faces around the hull's deepest vertex, the one most anti-parallel to the plane normal; its
-/// corners within `speculative_distance` of the plane are the points, reduced to at most 4 (the
-/// deepest and the three that span the largest area). The normal is minus the plane normal (from
-/// the hull into the plane's solid).
+/// corners within `speculative_distance` of the plane, and every other vertex that overlaps the
+/// plane, are the candidates, reduced to at most 4 (the deepest and the three that span the
+/// largest area, among the overlapping ones when at least three overlap). The normal is minus the
+/// plane normal (from the hull into the plane's solid).
 ContactManifold collide_hull_plane(const ConvexHull& a, const Transform& ta, const Plane& plane,
                                    double speculative_distance);
 
 /// Reduce candidate points (all on one manifold normal) to at most 4: the deepest, then the point
 /// farthest from it, then the two that add the most area on each side (Box2D/Jolt style). Keeps
 /// the input when it has 4 or fewer. `normal` is the manifold normal. With a finite `touch_band`
-/// (m), the choice is made among the points within that band of the deepest when at least three
-/// are (the collide functions pass 2 % of the smaller hull radius).
+/// (m), the choice is made among the points that touch, those that overlap or lie within that band
+/// of the deepest, when at least three do (the collide functions pass 2 % of the smaller hull
+/// radius).
 int reduce_manifold_points(const Vec3& normal, std::span<const ManifoldPoint> candidates,
                            std::array<ManifoldPoint, 4>& out,
                            double touch_band = std::numeric_limits<double>::infinity());

@@ -505,6 +505,18 @@ ContactManifold collide_hull_plane(const ConvexHull& a, const Transform& ta, con
       e = a.edges[static_cast<std::size_t>(e)].next;
     } while (e != first);
   }
+  // And every other vertex that overlaps: a hull sunk deeper than its incident face (a thin shard
+  // landing on an edge, a piece pressed in) has overlapping corners off that face, and a manifold
+  // of the face alone pushes on one side of the body, turning it while its other side sinks.
+  const std::size_t on_face = s.candidates.size();
+  for (std::size_t i = 0; i < a.vertices.size(); ++i) {
+    const double sep = n.dot(a.vertices[i]) - offset;
+    if (sep >= 0) continue;
+    const auto feature = kKindPlane << 30 | (static_cast<std::uint32_t>(i) & 0x3fffffffu);
+    if (std::none_of(s.candidates.begin(), s.candidates.begin() + static_cast<std::ptrdiff_t>(on_face),
+                     [feature](const ManifoldPoint& c) { return c.feature == feature; }))
+      s.candidates.push_back({a.vertices[i] - 0.5 * sep * n, sep, feature});
+  }
   ContactManifold m;
   m.normal = -plane.normal;
   // Reduced in A's frame; the normal's sign does not matter to the reduction's choice.
@@ -522,7 +534,8 @@ int reduce_manifold_points(const Vec3& normal, std::span<const ManifoldPoint> ca
     return static_cast<int>(n);
   }
   if (std::isfinite(touch_band)) {
-    // Keep to the points that touch (within the band of the deepest) when they span an area: a
+    // Keep to the points that touch (overlapping, or within the band of the deepest) when they span
+    // an area: a
     // curved hull resting on a plane has many vertices within the speculative distance, and a
     // support polygon chosen from those with a gap lets the body sink and rock on the side it
     // leaves out.
@@ -531,7 +544,7 @@ int reduce_manifold_points(const Vec3& normal, std::span<const ManifoldPoint> ca
     thread_local std::vector<ManifoldPoint> touching;
     touching.clear();
     for (const ManifoldPoint& c : candidates)
-      if (c.separation <= deepest + touch_band) touching.push_back(c);
+      if (c.separation <= std::max(deepest + touch_band, 0.0)) touching.push_back(c);
     if (touching.size() >= 3 && touching.size() < n) return reduce_manifold_points(normal, touching, out);
   }
   // 1: the deepest (lowest separation; ties to the first).
