@@ -120,8 +120,8 @@ struct WorldSettings {
   DecompositionOptions decomposition;  ///< convex pieces of tet bodies
   /// Contacts are made for gaps up to this plus the distance the pair can close within a step, m.
   double speculative_distance = 0.004;
-  /// Speed limits of dynamic rigid bodies, enforced every substep after gravity (Jolt's 500 m/s;
-  /// PhysX's 100 rad/s). Past them the contacts, found once per step, cannot hold a body: a small
+  /// Speed limits of dynamic rigid bodies, enforced every substep after gravity and again after
+  /// the contact solve, before the positions move (Jolt's 500 m/s; PhysX's 100 rad/s). Past them the contacts, found once per step, cannot hold a body: a small
   /// piece driven by a large tool force, or spinning through most of a turn within a step, would
   /// pass through the ground. m/s, > 0 (infinity: no limit).
   double max_linear_speed = 500;

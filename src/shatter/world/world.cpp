@@ -1044,6 +1044,16 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
   const Vec3 dv_gravity = h * settings_.gravity;
   const double max_speed = settings_.max_linear_speed;
   const double max_spin = settings_.max_rotation / settings_.time_step;
+  // Scaled back to the limits (the direction kept); below them, untouched. Before the substep's
+  // solve, and again before the drift: the solve may push a light piece past them (the points of
+  // a manifold pushed one after another spin a thin shard), and the drift must not move it
+  // farther than the limits allow, nor the step's contacts, found at its start, go stale.
+  const auto limit_speeds = [max_speed, max_spin](SolverBody& s) {
+    if (const double v2 = s.linear_velocity.squaredNorm(); v2 > max_speed * max_speed)
+      s.linear_velocity *= max_speed / std::sqrt(v2);
+    if (const double w2 = s.angular_velocity.squaredNorm(); w2 > max_spin * max_spin)
+      s.angular_velocity *= max_spin / std::sqrt(w2);
+  };
   // Four constraints at a time, in an order that depends only on the constraints' (contact_batches.h).
   ContactBatches& batches = group.batches;
   batches.build(group.constraints, solver_bodies_);
@@ -1061,11 +1071,7 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
             s.linear_velocity += (h * s.inverse_mass) * b.press_force;
             s.angular_velocity += s.inverse_inertia * (h * b.press_torque);
           }
-          // Scaled back to the limits (the direction kept); below them, untouched.
-          if (const double v2 = s.linear_velocity.squaredNorm(); v2 > max_speed * max_speed)
-            s.linear_velocity *= max_speed / std::sqrt(v2);
-          if (const double w2 = s.angular_velocity.squaredNorm(); w2 > max_spin * max_spin)
-            s.angular_velocity *= max_spin / std::sqrt(w2);
+          limit_speeds(s);
         },
         settings_.parallel_min_bodies);
     batches.measure_approach(solver_bodies_);
@@ -1082,6 +1088,7 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
           for (std::int64_t k = 0; k < count; ++k) {
             Body& b = bodies_[moving[first + k]];
             SolverBody& s = solver_bodies_[moving[first + k]];
+            if (b.type == BodyType::dynamic) limit_speeds(s);
             b.rigid.linear_velocity = s.linear_velocity;
             b.rigid.angular_velocity = s.angular_velocity;
             inertia[k] = &b.inertia;
