@@ -621,6 +621,43 @@ double hull_area(std::vector<Vec3> p, const Vec3& n) {
   return std::abs(area) / 2;
 }
 
+// Random hulls sunk into the top of a large box: the manifold holds B's deepest vertex, though the
+// incident face (B's face most anti-parallel to the box's top) need not be around it, and at least
+// three points overlap when three vertices do.
+TEST(Contact, HullSunkIntoABlockKeepsItsDeepestVertex) {
+  const ConvexHull block = make_box(Vec3(10, 10, 10));
+  const Transform tblock = at(Vec3(0, -10, 0));  // the top face at y = 0
+  Random rng(17);
+  int off_face = 0;  // trials where the deepest vertex is off the incident face
+  for (int trial = 0; trial < 400; ++trial) {
+    const ConvexHull h = random_hull(rng, static_cast<int>(rng.below(7)));
+    double lowest = 1e300, highest = -1e300;
+    for (const Vec3& v : h.vertices) {
+      lowest = std::min(lowest, v.y());
+      highest = std::max(highest, v.y());
+    }
+    const double depth = rng.uniform(0.05, 0.6) * (highest - lowest);
+    const Transform t = at(Vec3(rng.uniform(-1, 1), -depth - lowest, rng.uniform(-1, 1)));
+    const ContactManifold m = collide_hulls(block, tblock, h, t, 0.01);
+    ASSERT_GT(m.count, 0) << trial;
+    EXPECT_NEAR((m.normal - Vec3::UnitY()).norm(), 0, 1e-12) << trial;
+    double deepest = 1e300;
+    int overlapping = 0;
+    for (int i = 0; i < m.count; ++i) {
+      deepest = std::min(deepest, m.points[static_cast<std::size_t>(i)].separation);
+      overlapping += m.points[static_cast<std::size_t>(i)].separation < 0;
+    }
+    EXPECT_NEAR(deepest, -depth, 1e-12) << trial;
+    const auto sunk =
+        std::count_if(h.vertices.begin(), h.vertices.end(), [&](const Vec3& v) { return t.apply(v).y() < 0; });
+    EXPECT_GE(overlapping, std::min<std::ptrdiff_t>(sunk, 3)) << trial;
+    off_face += std::any_of(m.points.begin(), m.points.begin() + m.count, [](const ManifoldPoint& p) {
+      return (p.feature >> 7 & 127u) == 127u && (p.feature & 127u) < 127u;
+    });
+  }
+  EXPECT_GT(off_face, 20);
+}
+
 TEST(Contact, ReductionKeepsTheDeepestAndNearlyTheLargestArea) {
   Random rng(99);
   double worst_circle = 1, worst_disc = 1;

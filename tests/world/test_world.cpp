@@ -768,15 +768,15 @@ TEST(World, BadInputGivesErrors) {
   EXPECT_TRUE(w.restore(w.save()).ok());
 }
 
-// Curved shards (bent plates, like pieces of a vase wall) started sunk into the ground at random
-// turns, up to most of their size deep: they come out and rest on it. Their hulls have many small
-// faces, and the deepest corner's face need not hold the other sunk corners: a manifold of that
-// face alone pushed on one side, turning the shard while its other side stayed in, and 7 in 1,000
-// rested 5-7 mm deep; all sunk corners in the manifold leave at most 0.6 mm.
+// Curved shards (bent plates, like pieces of a vase wall) started sunk into the ground, a plane or
+// a static box, at random turns, up to most of their size deep: they come out and rest on it.
+// Their hulls have many small faces, and the incident face need not hold the other sunk corners:
+// a manifold of that face alone pushed on one side, turning the shard while its other side stayed
+// in, and 7 in 1,000 rested 5-7 mm deep; all sunk corners in the manifold leave at most 0.6 mm.
 TEST(World, SunkCurvedShardsComeOutAndRest) {
   Random rng(7);
   double deepest_at_rest = 0;
-  for (int trial = 0; trial < 300; ++trial) {
+  for (int trial = 0; trial < 400; ++trial) {
     const Vec3 half(rng.uniform(0.01, 0.05), rng.uniform(0.001, 0.004), rng.uniform(0.01, 0.03));
     TetMesh mesh = make_box_mesh({.min = -half, .max = half, .cells = {8, 1, 3}});
     const double radius = rng.uniform(0.03, 0.1);  // of the bend, m
@@ -786,7 +786,14 @@ TEST(World, SunkCurvedShardsComeOutAndRest) {
     }
     const auto model = std::make_shared<const BodyModel>(*make_body_model(mesh, Material{}));
     World w(scenes::settings(false));
-    add_ground(w);
+    if (trial % 2 == 0) {
+      add_ground(w);
+    } else {  // a block whose top is the ground
+      BodyDef block;
+      block.type = BodyType::static_body;
+      block.rigid.position = Vec3(0, -0.5, 0);
+      ASSERT_OK(w.add_box(Vec3(0.5, 0.5, 0.5), block));
+    }
     BodyDef def;
     def.breakable = false;
     def.rigid.orientation = Quat(Eigen::AngleAxisd(rng.uniform(0, 3.14), rng.unit_vec3()));

@@ -44,7 +44,8 @@ struct ManifoldPoint {
   ///   HullFace::edge, mod 64) or 64 + a reference-face side (same numbering). An incident vertex
   ///   lies on its two incident edges, a clipped point on an incident edge and a side, a corner of
   ///   the reference face on two sides; (127, 127) marks the single deepest-vertex point used when
-  ///   clipping leaves nothing.
+  ///   clipping leaves nothing. An overlapping vertex i off the incident face has (127, i mod 127),
+  ///   in that order, and i / 127 (mod 256) in place of the incident face.
   /// - 2 (edge contact): bits 29-15 A's edge, 14-0 B's edge (half-edge / 2, mod 2^15).
   /// - 3 (hull and plane): bits 29-0 the hull vertex.
   /// Unique within a manifold while faces have at most 64 edges.
@@ -75,8 +76,10 @@ struct SatCache {
 /// s_edge > s_face + 0.1 |s_face| + 0.002 r (s: separation along the axis, s_face the larger of
 /// the two), so resting boxes always get a face manifold and the choice does not flicker. Incident
 /// vertices up to 0.001 r outside a side plane of the reference face are kept as they are (equal
-/// stacked boxes keep their 4 corners and ids under round-off). When clipping leaves no point
-/// (deep, sideways overlaps) the edge pair gives one point, else the deepest incident vertex. The
+/// stacked boxes keep their 4 corners and ids under round-off). The incident hull's other vertices
+/// that overlap, within the same side planes, are candidates too (a hull sunk past its incident
+/// face). When that leaves no point (deep, sideways overlaps) the edge pair gives one point, else
+/// the deepest incident vertex. The
 /// cache is only tested first: if its axis still separates beyond the speculative distance the
 /// result is empty at once; otherwise the full test runs, so results never depend on it.
 ContactManifold collide_hulls(const ConvexHull& a, const Transform& ta, const ConvexHull& b, const Transform& tb,

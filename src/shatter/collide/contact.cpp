@@ -90,6 +90,7 @@ struct Scratch {
   std::vector<EdgeData> b_edges;    // B's edges in A's frame
   std::vector<int> sign_a, sign_b;  // see query_edges
   std::vector<ClipVertex> poly, clipped;
+  std::vector<Index> face_vertices;  // the incident face's vertices
   std::vector<ManifoldPoint> candidates;
 };
 
@@ -278,6 +279,30 @@ std::uint32_t face_feature(std::uint32_t kind, Index ref_face, Index inc_face, s
          (static_cast<std::uint32_t>(inc_face) & 255u) << 14 | lo << 7 | hi;
 }
 
+// Feature of an overlapping vertex of the incident hull off its incident face: the line codes
+// (127, i mod 127) in that order (clipped points have the smaller code first, and (127, 127)
+// marks the single deepest vertex), the incident-face field i / 127.
+std::uint32_t overlap_feature(std::uint32_t kind, Index ref_face, Index i) {
+  const auto v = static_cast<std::uint32_t>(i);
+  return kind << 30 | (static_cast<std::uint32_t>(ref_face) & 255u) << 22 | ((v / 127) & 255u) << 14 | 127u << 7 |
+         v % 127;
+}
+
+// Whether p (reference frame) lies within the side planes of reference face rf, moved out by margin.
+bool within_sides(const ConvexHull& ref, const HullFace& rf, const Vec3& p, double margin) {
+  const Index first = rf.edge;
+  Index e = first;
+  do {
+    const HullHalfEdge& h = ref.edges[static_cast<std::size_t>(e)];
+    const Vec3& v0 = ref.vertices[static_cast<std::size_t>(h.origin)];
+    const Vec3& v1 = ref.vertices[static_cast<std::size_t>(ref.edges[static_cast<std::size_t>(h.next)].origin)];
+    const Vec3 plane = (v1 - v0).cross(rf.normal).normalized();
+    if (plane.dot(p) - plane.dot(v0) > margin) return false;
+    e = h.next;
+  } while (e != first);
+  return true;
+}
+
 // Face contact in the reference hull's frame: the incident face of `inc` (placed by `rel`) clipped
 // against the side planes of face `ref_face` of `ref`. Writes the reduced points (reference frame)
 // to `out` and returns their count.
@@ -302,6 +327,7 @@ int face_contact(const ConvexHull& ref, Index ref_face, const ConvexHull& inc, c
 
   // Incident polygon in the reference frame; vertex i lies on incident edges i-1 and i.
   s.poly.clear();
+  s.face_vertices.clear();
   {
     const Index first = inc.faces[static_cast<std::size_t>(inc_face)].edge;
     Index e = first;
@@ -315,6 +341,7 @@ int face_contact(const ConvexHull& ref, Index ref_face, const ConvexHull& inc, c
       const HullHalfEdge& h = inc.edges[static_cast<std::size_t>(e)];
       s.poly.push_back({rel.apply(inc.vertices[static_cast<std::size_t>(h.origin)]),
                         line_code(0, (i + count - 1) % count), line_code(0, i), line_code(0, i)});
+      s.face_vertices.push_back(h.origin);
       e = h.next;
       ++i;
     } while (e != first);
@@ -362,6 +389,20 @@ int face_contact(const ConvexHull& ref, Index ref_face, const ConvexHull& inc, c
     const double sep = n.dot(v.p) - rf.offset;
     if (sep <= speculative_distance)
       s.candidates.push_back({v.p - 0.5 * sep * n, sep, face_feature(kind, ref_face, inc_face, v.line_a, v.line_b)});
+  }
+  // And every vertex of `inc` off the incident face that overlaps, within the side planes: a hull
+  // sunk past its incident face (a curved shard pressed into a block) has overlapping corners off
+  // that face, and a manifold of the face alone pushes on one side of it, turning it while its
+  // other side stays in. (As collide_hull_plane does.)
+  const double shift = n.dot(rel.t) - rf.offset;  // separation of inc's vertex v: n_inc . v + shift
+  for (Index i = 0; i < static_cast<Index>(inc.vertices.size()); ++i) {
+    if (n_inc.dot(inc.vertices[static_cast<std::size_t>(i)]) + shift >= 0 ||
+        std::find(s.face_vertices.begin(), s.face_vertices.end(), i) != s.face_vertices.end())
+      continue;
+    const Vec3 p = rel.apply(inc.vertices[static_cast<std::size_t>(i)]);
+    const double sep = n.dot(p) - rf.offset;
+    if (sep < 0 && within_sides(ref, rf, p, side_margin))
+      s.candidates.push_back({p - 0.5 * sep * n, sep, overlap_feature(kind, ref_face, i)});
   }
   return reduce_manifold_points(n, s.candidates, out, kTouchBand * std::min(ref.radius, inc.radius));
 }
