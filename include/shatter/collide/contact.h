@@ -48,7 +48,8 @@ struct ManifoldPoint {
   ///   in that order, and i / 127 (mod 256) in place of the incident face.
   /// - 2 (edge contact): bits 29-15 A's edge, 14-0 B's edge (half-edge / 2, mod 2^15).
   /// - 3 (hull and plane): bits 29-0 the hull vertex.
-  /// Unique within a manifold while faces have at most 64 edges.
+  /// Unique within a manifold while faces have at most 64 edges and hulls fewer than 127 x 256
+  /// vertices.
   std::uint32_t feature = 0;
 };
 
@@ -96,8 +97,8 @@ double hull_separation(const ConvexHull& a, const Transform& ta, const ConvexHul
 /// faces around the hull's deepest vertex, the one most anti-parallel to the plane normal; its
 /// corners within `speculative_distance` of the plane, and every other vertex that overlaps the
 /// plane, are the candidates, reduced to at most 4 (the deepest and the three that span the
-/// largest area, among the overlapping ones when at least three overlap). The normal is minus the
-/// plane normal (from the hull into the plane's solid).
+/// largest area, chosen among those that touch when at least three do: reduce_manifold_points).
+/// The normal is minus the plane normal (from the hull into the plane's solid).
 ContactManifold collide_hull_plane(const ConvexHull& a, const Transform& ta, const Plane& plane,
                                    double speculative_distance);
 

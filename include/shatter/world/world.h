@@ -121,9 +121,11 @@ struct WorldSettings {
   /// Contacts are made for gaps up to this plus the distance the pair can close within a step, m.
   double speculative_distance = 0.004;
   /// Speed limits of dynamic rigid bodies, enforced every substep after gravity and again after
-  /// the contact solve, before the positions move (Jolt's 500 m/s; PhysX's 100 rad/s). Past them the contacts, found once per step, cannot hold a body: a small
-  /// piece driven by a large tool force, or spinning through most of a turn within a step, would
-  /// pass through the ground. m/s, > 0 (infinity: no limit).
+  /// the contact solve, before the positions move (Jolt's 500 m/s; PhysX's 100 rad/s). Past them
+  /// the contacts, found once per step, cannot hold a body: a small piece driven by a large tool
+  /// force, or spinning through most of a turn within a step, would pass through the ground. The
+  /// velocities at the end of a step (after the relax and restitution passes) may exceed them;
+  /// the next substep scales them back. m/s, > 0 (infinity: no limit).
   double max_linear_speed = 500;
   /// Largest rotation of a dynamic rigid body in one step, rad, > 0: a quarter turn, 94 rad/s at
   /// 1/60 s. A body turning further within a step brings points into contact that the step's
