@@ -58,9 +58,9 @@ struct ContactPoint {
   Vec3 anchor_a = Vec3::Zero();  ///< position's world offset from A's centre of mass, m (the rows' lever arm)
   Vec3 anchor_b = Vec3::Zero();  ///< the same for B
   /// The point of A's surface, position - separation/2 normal, in A's frame at the step's start
-  /// (static and kinematic bodies included), m. The solver follows the separation with the two surface points: position itself
-  /// lies up to half a speculative gap off each body, and a spinning body would carry that point,
-  /// not its surface.
+  /// (static and kinematic bodies included), m. The solver follows the separation with the two
+  /// surface points: position itself lies up to half a speculative gap off each body, and a
+  /// spinning body would carry that point, not its surface.
   Vec3 local_anchor_a = Vec3::Zero();
   Vec3 local_anchor_b = Vec3::Zero();  ///< B's point, position + separation/2 normal, in B's frame
   /// separation - n . (on_B - on_A) at the start, from the surface points as stored (round-off):

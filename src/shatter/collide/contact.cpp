@@ -288,16 +288,28 @@ std::uint32_t overlap_feature(std::uint32_t kind, Index ref_face, Index i) {
          v % 127;
 }
 
+// The side plane through half-edge e of face rf of `ref`: outward unit normal and offset (points p
+// with normal . p > offset lie outside). Counter-clockwise loop seen from outside: (v1 - v0) x n
+// points out of the face.
+struct SidePlane {
+  Vec3 normal;
+  double offset;
+};
+SidePlane side_plane(const ConvexHull& ref, const HullFace& rf, const HullHalfEdge& h) {
+  const Vec3& v0 = ref.vertices[static_cast<std::size_t>(h.origin)];
+  const Vec3& v1 = ref.vertices[static_cast<std::size_t>(ref.edges[static_cast<std::size_t>(h.next)].origin)];
+  const Vec3 normal = (v1 - v0).cross(rf.normal).normalized();
+  return {normal, normal.dot(v0)};
+}
+
 // Whether p (reference frame) lies within the side planes of reference face rf, moved out by margin.
 bool within_sides(const ConvexHull& ref, const HullFace& rf, const Vec3& p, double margin) {
   const Index first = rf.edge;
   Index e = first;
   do {
     const HullHalfEdge& h = ref.edges[static_cast<std::size_t>(e)];
-    const Vec3& v0 = ref.vertices[static_cast<std::size_t>(h.origin)];
-    const Vec3& v1 = ref.vertices[static_cast<std::size_t>(ref.edges[static_cast<std::size_t>(h.next)].origin)];
-    const Vec3 plane = (v1 - v0).cross(rf.normal).normalized();
-    if (plane.dot(p) - plane.dot(v0) > margin) return false;
+    const SidePlane side = side_plane(ref, rf, h);
+    if (side.normal.dot(p) - side.offset > margin) return false;
     e = h.next;
   } while (e != first);
   return true;
@@ -354,11 +366,7 @@ int face_contact(const ConvexHull& ref, Index ref_face, const ConvexHull& inc, c
     int side = 0;
     do {
       const HullHalfEdge& h = ref.edges[static_cast<std::size_t>(e)];
-      const Vec3& v0 = ref.vertices[static_cast<std::size_t>(h.origin)];
-      const Vec3& v1 = ref.vertices[static_cast<std::size_t>(ref.edges[static_cast<std::size_t>(h.next)].origin)];
-      // Counter-clockwise loop seen from outside: (v1 - v0) x n points out of the face.
-      const Vec3 plane = (v1 - v0).cross(n).normalized();
-      const double offset = plane.dot(v0);
+      const auto [plane, offset] = side_plane(ref, rf, h);
       const std::uint8_t code = line_code(kSideLine, side);
       s.clipped.clear();
       const std::size_t m = s.poly.size();
@@ -576,10 +584,9 @@ int reduce_manifold_points(const Vec3& normal, std::span<const ManifoldPoint> ca
   }
   if (std::isfinite(touch_band)) {
     // Keep to the points that touch (overlapping, or within the band of the deepest) when they span
-    // an area: a
-    // curved hull resting on a plane has many vertices within the speculative distance, and a
-    // support polygon chosen from those with a gap lets the body sink and rock on the side it
-    // leaves out.
+    // an area: a curved hull resting on a plane has many vertices within the speculative distance,
+    // and a support polygon chosen from those with a gap lets the body sink and rock on the side
+    // it leaves out.
     double deepest = kInf;
     for (const ManifoldPoint& c : candidates) deepest = std::min(deepest, c.separation);
     thread_local std::vector<ManifoldPoint> touching;
