@@ -618,8 +618,17 @@ class World {
     std::vector<Index> moving;                    ///< awake non-static bodies, by slot
     std::vector<ContactConstraint*> constraints;  ///< in the order of contacts_
     ContactBatches batches;
+    /// Shock propagation this step (ContactSolverSettings::shock_mass_ratio): the constraints whose
+    /// lighter body is pressed into its support, with whether that body is A; then the
+    /// constraints of those bodies with their support, with whether the support is A; in the
+    /// order of contacts_.
+    std::vector<std::pair<ContactConstraint*, bool>> shock;
+    std::vector<std::pair<ContactConstraint*, bool>> shock_support;
   };
   std::vector<SolveGroup> solve_groups_;  ///< the first solve_group_count_ are this step's
+  /// Per solver body, the sum of the normals (into it) of its contacts with bodies that do not
+  /// move in the solve (set per step for the moving bodies; shock propagation).
+  std::vector<Vec3> support_normal_;
   std::size_t solve_group_count_ = 0;
   std::vector<Index> solve_parent_;
   /// Whether the solver moves the body this step (awake and not static; kinematic bodies included).

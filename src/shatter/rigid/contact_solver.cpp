@@ -241,6 +241,39 @@ void solve_contact(ContactConstraint& c, std::span<SolverBody> bodies, double in
   m.store(c, bodies);
 }
 
+void push_off_supported(const ContactConstraint& c, std::span<SolverBody> bodies, bool supported_is_a, double inverse_h,
+                        bool use_bias, double max_push_velocity) {
+  PairMotion m(c, bodies);
+  const SolverBody& a = bodies[c.body_a];
+  const SolverBody& b = bodies[c.body_b];
+  const Vec3 normal_in_a = a.rotation.transpose() * c.normal;
+  const Vec3 normal_in_b = b.rotation.transpose() * c.normal;
+  const double centre_gap = c.normal.dot(b.position) - c.normal.dot(a.position);
+  const double inverse_mass = supported_is_a ? m.inverse_mass_b : m.inverse_mass_a;
+  for (int i = 0; i < c.count; ++i) {
+    const ContactPoint& p = c.points[i];
+    const double s =
+        p.adjusted_separation + centre_gap + (normal_in_b.dot(p.local_anchor_b) - normal_in_a.dot(p.local_anchor_a));
+    // The least normal velocity of B relative to A at the point.
+    const double target =
+        s > 0 ? -s * inverse_h : (use_bias ? std::min(-c.softness.bias_rate * s, max_push_velocity) : 0.0);
+    const double vn = m.row_velocity(c.normal, p.rn_a, p.rn_b);
+    if (vn >= target) continue;
+    // The moving body's own effective mass at the point.
+    const double k = supported_is_a ? inverse_mass + p.rn_b.dot(p.ang_b) : inverse_mass + p.rn_a.dot(p.ang_a);
+    if (!(k > 0)) continue;
+    const double l = (target - vn) / k;
+    if (supported_is_a) {
+      m.vb += (inverse_mass * l) * c.normal;
+      m.wb += l * p.ang_b;
+    } else {
+      m.va -= (inverse_mass * l) * c.normal;
+      m.wa -= l * p.ang_a;
+    }
+  }
+  m.store(c, bodies);
+}
+
 void apply_restitution(ContactConstraint& c, std::span<SolverBody> bodies, double threshold) {
   if (c.restitution == 0) return;
   PairMotion m(c, bodies);

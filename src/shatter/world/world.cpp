@@ -929,6 +929,7 @@ void World::solve() {
   // The bodies that do not move (static, asleep) are read by the constraints and never written;
   // each group sets up its own moving bodies (solve_group).
   solver_bodies_.resize(n);
+  support_normal_.resize(n);
   std::vector<Index> moving;
   for (Index i = 0; i < n; ++i) {
     const Body& b = bodies_[i];
@@ -1054,6 +1055,50 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
     if (const double w2 = s.angular_velocity.squaredNorm(); w2 > max_spin * max_spin)
       s.angular_velocity *= max_spin / std::sqrt(w2);
   };
+  // Shock propagation: a heavy body pressing a light one into its support stops against it.
+  group.shock.clear();
+  group.shock_support.clear();
+  if (const double ratio = settings_.contact.shock_mass_ratio; ratio > 0) {
+    for (const Index i : moving) support_normal_[i].setZero();
+    for (ContactConstraint* c : group.constraints) {
+      if (c->a_responds == c->b_responds) continue;
+      if (c->b_responds)
+        support_normal_[c->body_b] += c->normal;
+      else
+        support_normal_[c->body_a] -= c->normal;
+    }
+    for (ContactConstraint* c : group.constraints) {
+      if (!c->a_responds || !c->b_responds) continue;
+      const double ma = solver_bodies_[c->body_a].inverse_mass, mb = solver_bodies_[c->body_b].inverse_mass;
+      // The lighter body: its inverse mass at least `ratio` times the other's.
+      const bool light_a = ma >= ratio * mb;
+      if (!light_a && !(mb >= ratio * ma)) continue;
+      const Index light = light_a ? c->body_a : c->body_b;
+      const Vec3& up = support_normal_[light];
+      // Pressed into its support: the push on it (from the other body) against its support's.
+      const Vec3 push = light_a ? Vec3(-c->normal) : c->normal;
+      if (!(push.dot(up) < -0.5 * up.norm())) continue;
+      group.shock.emplace_back(c, light_a);
+    }
+    if (!group.shock.empty())
+      for (ContactConstraint* c : group.constraints) {
+        if (c->a_responds == c->b_responds) continue;
+        const Index body = c->a_responds ? c->body_a : c->body_b;
+        for (const auto& [sc, light_a] : group.shock)
+          if ((light_a ? sc->body_a : sc->body_b) == body) {
+            group.shock_support.emplace_back(c, !c->a_responds);
+            break;
+          }
+      }
+  }
+  // After a pass: the heavy bodies stop against the light ones, then the light ones against their
+  // support.
+  const auto push_off = [&](bool use_bias) {
+    for (const auto& [c, light_a] : group.shock)
+      push_off_supported(*c, solver_bodies_, light_a, inverse_h, use_bias, settings_.contact.max_push_velocity);
+    for (const auto& [c, support_a] : group.shock_support)
+      push_off_supported(*c, solver_bodies_, support_a, inverse_h, use_bias, settings_.contact.max_push_velocity);
+  };
   // Four constraints at a time, in an order that depends only on the constraints' (contact_batches.h).
   ContactBatches& batches = group.batches;
   batches.build(group.constraints, solver_bodies_);
@@ -1077,6 +1122,7 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
     batches.measure_approach(solver_bodies_);
     batches.warm_start(solver_bodies_);
     batches.solve(solver_bodies_, inverse_h, true, settings_.contact.max_push_velocity);
+    push_off(true);
     // Drift in groups of four bodies (integrate_positions: side by side in vector lanes).
     parallel_for(
         0, (num_moving + 3) / 4,
@@ -1107,6 +1153,7 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
         },
         (settings_.parallel_min_bodies + 3) / 4);  // groups: the same threshold in bodies
     batches.solve(solver_bodies_, inverse_h, false, settings_.contact.max_push_velocity);
+    push_off(false);
   }
   batches.store();
   for (ContactConstraint* c : group.constraints)
