@@ -99,8 +99,19 @@ double hull_separation(const ConvexHull& a, const Transform& ta, const ConvexHul
 /// plane, are the candidates, reduced to at most 4 (the deepest and the three that span the
 /// largest area, chosen among those that touch when at least three do: reduce_manifold_points).
 /// The normal is minus the plane normal (from the hull into the plane's solid).
+///
+/// With `motion`, the hull's velocity over the coming step: the vertex that this motion, held for
+/// `motion->dt`, takes deepest through the plane (deeper than `motion->depth`) joins the manifold
+/// when it is not in it, in place of its point with the widest gap when it is full. A shard turning fast about the edge it lands on brings its other side down
+/// within the step; those vertices are off the incident face and do not overlap yet.
+struct HullMotion {
+  Vec3 linear_velocity = Vec3::Zero();   ///< of the point at ta's origin, world, m/s
+  Vec3 angular_velocity = Vec3::Zero();  ///< world, rad/s
+  double dt = 0;                         ///< s
+  double depth = 0.001;                  ///< m
+};
 ContactManifold collide_hull_plane(const ConvexHull& a, const Transform& ta, const Plane& plane,
-                                   double speculative_distance);
+                                   double speculative_distance, const HullMotion* motion = nullptr);
 
 /// Reduce candidate points (all on one manifold normal) to at most 4: the deepest, then the point
 /// farthest from it, then the two that add the most area on each side (Box2D/Jolt style). Keeps

@@ -128,15 +128,10 @@ struct ContactSolverSettings {
   double restitution_threshold = 1;  ///< approach speed below which contacts do not bounce, m/s
   /// Shock propagation: a body at least this many times heavier than a body it presses into that
   /// body's support (something that does not move: static, kinematic or asleep) is stopped by it as
-  /// by a wall (push_off_supported, after each pass). 0: off, the default for now. With 4, a block
-  /// 10 to 100 times heavier than a piece on the ground, landing on it at 1 to 5 m/s, drives it at
-  /// most 0.34 mm into the ground, against up to 38 mm without (the piece is 4 cm thick). It is
-  /// not on by default: it changes the trajectories of the impact soak, which then meets a shard
-  /// that turns fast about the edge it lands on and brings its other side down through the ground
-  /// within the step. That side's vertices are off the incident face and not yet overlapping, so
-  /// the plane's manifold does not hold them (a weakness of the manifold, not of this pass, which
-  /// was off for that step too; docs/method.md, "No tunnelling").
-  double shock_mass_ratio = 0;
+  /// by a wall (push_off_supported, after each pass). 0: off. A block 10 to 100 times heavier than
+  /// a piece on the ground, landing on it at 1 to 5 m/s, drives it at most 0.34 mm into the ground,
+  /// against up to 38 mm without (the piece is 4 cm thick).
+  double shock_mass_ratio = 4;
 };
 
 /// Fill the constraint's derived data once per step, from points whose position and separation

@@ -515,7 +515,7 @@ ContactManifold collide_hulls(const ConvexHull& a, const Transform& ta, const Co
 }
 
 ContactManifold collide_hull_plane(const ConvexHull& a, const Transform& ta, const Plane& plane,
-                                   double speculative_distance) {
+                                   double speculative_distance, const HullMotion* motion) {
   // The plane in A's frame: n . x = offset.
   const Vec3 n = ta.rotation.transpose() * plane.normal;
   const double offset = plane.offset - plane.normal.dot(ta.translation);
@@ -570,6 +570,41 @@ ContactManifold collide_hull_plane(const ConvexHull& a, const Transform& ta, con
   m.normal = -plane.normal;
   // Reduced in A's frame; the normal's sign does not matter to the reduction's choice.
   m.count = reduce_manifold_points(-n, s.candidates, m.points, kTouchBand * a.radius);
+  if (motion != nullptr && m.count > 0) {
+    // The vertex the motion takes deepest: its separation at the step's end, held to first order,
+    // sep - dt n . (v + w x r) with r = R v_i (the hull's frame turned into the world's).
+    const Vec3 v = ta.rotation.transpose() * motion->linear_velocity;  // in A's frame
+    const Vec3 w = ta.rotation.transpose() * motion->angular_velocity;
+    Index arriving = -1;
+    double lowest = -motion->depth;
+    for (std::size_t i = 0; i < a.vertices.size(); ++i) {
+      const Vec3& p = a.vertices[i];
+      const double sep = n.dot(p) - offset;
+      const double end = sep + motion->dt * n.dot(v + w.cross(p));
+      if (sep <= speculative_distance && end < lowest) {
+        lowest = end;
+        arriving = static_cast<Index>(i);
+      }
+    }
+    if (arriving >= 0) {
+      const auto feature = kKindPlane << 30 | (static_cast<std::uint32_t>(arriving) & 0x3fffffffu);
+      const auto held = m.points.begin() + m.count;
+      if (std::none_of(m.points.begin(), held, [feature](const ManifoldPoint& c) { return c.feature == feature; })) {
+        int slot = m.count;
+        if (m.count == 4)
+          slot = static_cast<int>(std::max_element(m.points.begin(), held,
+                                                   [](const ManifoldPoint& x, const ManifoldPoint& y) {
+                                                     return x.separation < y.separation;
+                                                   }) -
+                                  m.points.begin());
+        else
+          ++m.count;
+        const Vec3& p = a.vertices[static_cast<std::size_t>(arriving)];
+        const double sep = n.dot(p) - offset;
+        m.points[static_cast<std::size_t>(slot)] = {p - 0.5 * sep * n, sep, feature};
+      }
+    }
+  }
   for (int i = 0; i < m.count; ++i)
     m.points[static_cast<std::size_t>(i)].point = ta.apply(m.points[static_cast<std::size_t>(i)].point);
   return m;

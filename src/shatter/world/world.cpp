@@ -736,8 +736,13 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
             return;
           }
           const auto& pieces = body.shape->pieces;
+          const HullMotion motion{.linear_velocity = body.rigid.linear_velocity,
+                                  .angular_velocity = body.rigid.angular_velocity,
+                                  .dt = settings_.time_step,
+                                  .depth = 0.25 * settings_.speculative_distance};
+          const bool moving = body.awake && body.type != BodyType::static_body;
           for (Index i = 0; i < static_cast<Index>(pieces.size()); ++i) {
-            ContactManifold m = collide_hull_plane(pieces[i], tbody, plane, margin);
+            ContactManifold m = collide_hull_plane(pieces[i], tbody, plane, margin, moving ? &motion : nullptr);
             if (plane_first) m.normal = -m.normal;  // from the plane (A) to the hull (B)
             add_manifold(m, plane_first ? -1 : i, plane_first ? i : -1, {});
           }
