@@ -77,6 +77,20 @@ struct PairMotion {
   return applied;
 }
 
+// Each point's current separation, n . (p_B - p_A) + adjusted with p = x + R r_local the surface
+// points, from the normal turned into each body's frame once per pass: n . (R r) = (R^T n) . r.
+struct PointGaps {
+  Vec3 normal_in_a, normal_in_b;
+  double centre_gap;
+  PointGaps(const ContactConstraint& c, std::span<const SolverBody> bodies)
+      : normal_in_a(bodies[c.body_a].rotation.transpose() * c.normal),
+        normal_in_b(bodies[c.body_b].rotation.transpose() * c.normal),
+        centre_gap(c.normal.dot(bodies[c.body_b].position) - c.normal.dot(bodies[c.body_a].position)) {}
+  [[nodiscard]] double at(const ContactPoint& p) const {
+    return p.adjusted_separation + centre_gap + (normal_in_b.dot(p.local_anchor_b) - normal_in_a.dot(p.local_anchor_a));
+  }
+};
+
 // Apply the friction impulse f (x along tangent 0, y along tangent 1) at the friction centre.
 [[gnu::always_inline]] inline void apply_friction(const ContactConstraint& c, PairMotion& m, const Eigen::Vector2d& f) {
   m.apply_row(c.tangents[0], c.ang_ta[0], c.ang_tb[0], f.x());
@@ -191,19 +205,12 @@ void measure_approach(ContactConstraint& c, std::span<const SolverBody> bodies) 
 void solve_contact(ContactConstraint& c, std::span<SolverBody> bodies, double inverse_h, bool use_bias,
                    double max_push_velocity) {
   PairMotion m(c, bodies);
-  // Each point's current separation, n . (p_B - p_A) + adjusted with p = x + R r_local the surface
-  // points, from the normal turned into each body's frame once per pass: n . (R r) = (R^T n) . r.
-  const SolverBody& a = bodies[c.body_a];
-  const SolverBody& b = bodies[c.body_b];
-  const Vec3 normal_in_a = a.rotation.transpose() * c.normal;
-  const Vec3 normal_in_b = b.rotation.transpose() * c.normal;
-  const double centre_gap = c.normal.dot(b.position) - c.normal.dot(a.position);
+  const PointGaps gaps(c, bodies);
   double total_normal = 0;
   double twist_limit = 0;
   for (int i = 0; i < c.count; ++i) {
     ContactPoint& p = c.points[i];
-    const double s =
-        p.adjusted_separation + centre_gap + (normal_in_b.dot(p.local_anchor_b) - normal_in_a.dot(p.local_anchor_a));
+    const double s = gaps.at(p);
     if (s > 0) {
       solve_normal(c, p, m, s * inverse_h, 1, 0);  // speculative: close the gap within the substep, no more
     } else if (use_bias) {
@@ -244,16 +251,11 @@ void solve_contact(ContactConstraint& c, std::span<SolverBody> bodies, double in
 void push_off_supported(const ContactConstraint& c, std::span<SolverBody> bodies, bool supported_is_a, double inverse_h,
                         bool use_bias, double max_push_velocity) {
   PairMotion m(c, bodies);
-  const SolverBody& a = bodies[c.body_a];
-  const SolverBody& b = bodies[c.body_b];
-  const Vec3 normal_in_a = a.rotation.transpose() * c.normal;
-  const Vec3 normal_in_b = b.rotation.transpose() * c.normal;
-  const double centre_gap = c.normal.dot(b.position) - c.normal.dot(a.position);
+  const PointGaps gaps(c, bodies);
   const double inverse_mass = supported_is_a ? m.inverse_mass_b : m.inverse_mass_a;
   for (int i = 0; i < c.count; ++i) {
     const ContactPoint& p = c.points[i];
-    const double s =
-        p.adjusted_separation + centre_gap + (normal_in_b.dot(p.local_anchor_b) - normal_in_a.dot(p.local_anchor_a));
+    const double s = gaps.at(p);
     // The least normal velocity of B relative to A at the point.
     const double target =
         s > 0 ? -s * inverse_h : (use_bias ? std::min(-c.softness.bias_rate * s, max_push_velocity) : 0.0);
