@@ -22,7 +22,7 @@ still render_vase scenes/vase_drop_x10.json 1.2 material 35,30,1.1 0,0.1,0
 still render_blocks scenes/block_on_block.json 1.5 material 40,25,1.5 0,0.2,0
 still render_teddy scenes/teddy_drops.json 5.0 material 30,20,1.2 0.55,0.12,-0.15
 still render_stress scenes/block_on_block.json 0.5 stress 40,20,1.5 0,0.2,0
-still render_shelf scenes/shelf_of_vases.json 2.2 material 25,20,2.6 0,0.5,0
+still render_shelf scenes/shelf_of_vases.json 3.0 material 25,20,2.6 0,0.5,0
 still render_wall scenes/wall_and_ball.json 1.2 material 35,18,3.0 0,0.35,0
 still render_soft scenes/soft_landing.json 0.5 material 20,18,2.2 0,0.1,-0.1
 
