@@ -563,6 +563,85 @@ TEST(Contact, PlaneManifoldHoldsTheVertexAFastTurnBringsDown) {
     EXPECT_EQ(other.points[static_cast<std::size_t>(i)].feature, still.points[static_cast<std::size_t>(i)].feature);
 }
 
+// A curved strip (a shard of a vase's wall) falling fast onto its low end, not turning: the landing
+// stops that end and swings the strip down about it, so its high end comes through the ground
+// within the step. Its incident face is a small facet at the low end. With the body's inverse mass
+// and inertia the manifold holds a vertex of the high end, the one this swing takes deepest;
+// without them (the motion alone) it does not.
+TEST(Contact, PlaneManifoldHoldsTheEndALandingSwingsDown) {
+  std::vector<Vec3> points;
+  for (int k = 0; k <= 12; ++k) {
+    const double a = -0.6 + 0.1 * k;
+    for (const double r : {0.15, 0.154})
+      for (const double z : {-0.012, 0.012}) points.emplace_back(r * std::sin(a), 0.15 - r * std::cos(a), z);
+  }
+  // Centred on the points' mean, taken as the centre of mass (0.2 kg shared by the points), and
+  // their inertia about it.
+  Vec3 centre = Vec3::Zero();
+  for (const Vec3& p : points) centre += p;
+  centre /= static_cast<double>(points.size());
+  const double mass = 0.2;
+  const double each = mass / static_cast<double>(points.size());
+  Mat3 inertia = Mat3::Zero();
+  for (Vec3& p : points) {
+    p -= centre;
+    inertia += each * (p.squaredNorm() * Mat3::Identity() - p * p.transpose());
+  }
+  const ConvexHull shard = *build_convex_hull(points);
+  const Mat3 r = rot(0.5, Vec3::UnitZ());  // the -x end low, the +x end high
+  double lowest = 1e300;
+  for (const Vec3& v : shard.vertices) lowest = std::min(lowest, (r * v).y());
+  const Transform t = at(Vec3(0, -lowest + 0.002, 0), r);
+  const Plane ground;
+  const double spec = 0.2;  // the world's: 4 mm plus what the motion can close in a step
+  const HullMotion falling{.linear_velocity = Vec3(0, -6, 0), .angular_velocity = Vec3::Zero(), .dt = 1.0 / 60};
+  HullMotion landing = falling;
+  landing.inverse_mass = 1 / mass;
+  landing.inverse_inertia = inertia.inverse();
+  // The swing, worked out here in the world frame: the impulse at the lowest vertex that stops it,
+  // and how deep the motion it leaves takes each vertex within the step.
+  std::size_t low = 0;
+  for (std::size_t k = 1; k < shard.vertices.size(); ++k)
+    if ((r * shard.vertices[k]).y() < (r * shard.vertices[low]).y()) low = k;
+  const Vec3 arm = r * shard.vertices[low];
+  const Mat3 inverse_world = r * landing.inverse_inertia * r.transpose();
+  const Vec3 rn = arm.cross(Vec3::UnitY());
+  const double impulse = 6 / (1 / mass + rn.dot(inverse_world * rn));
+  const Vec3 v = falling.linear_velocity + impulse / mass * Vec3::UnitY();
+  const Vec3 w = impulse * (inverse_world * rn);
+  const auto end_of = [&](const Vec3& corner) {
+    const Vec3 p = r * corner;
+    return p.y() + t.translation.y() + falling.dt * (v + w.cross(p)).y();
+  };
+  double deepest = 1e300;
+  for (const Vec3& corner : shard.vertices) deepest = std::min(deepest, end_of(corner));
+  ASSERT_LT(deepest, -0.02);  // through the ground within the step
+  const auto high_end = [&](const ContactManifold& m) {
+    int held = 0;
+    for (int i = 0; i < m.count; ++i) {
+      const ManifoldPoint& p = m.points[static_cast<std::size_t>(i)];
+      const Vec3 corner = t.apply_inverse(p.point + Vec3(0, 0.5 * p.separation, 0));
+      if (corner.x() > 0) {
+        ++held;
+        EXPECT_GT(p.separation, 0.02);  // far from the ground at the step's start
+        EXPECT_NEAR(end_of(corner), deepest, 1e-9);
+      }
+    }
+    return held;
+  };
+  EXPECT_EQ(high_end(collide_hull_plane(shard, t, ground, spec, &falling)), 0);
+  const ContactManifold swung = collide_hull_plane(shard, t, ground, spec, &landing);
+  EXPECT_EQ(high_end(swung), 1);
+  // Moving away, nothing lands: the manifold of the motion alone.
+  HullMotion rising = landing;
+  rising.linear_velocity = Vec3(0, 1, 0);
+  const ContactManifold still = collide_hull_plane(shard, t, ground, spec, nullptr);
+  const ContactManifold up = collide_hull_plane(shard, t, ground, spec, &rising);
+  ASSERT_EQ(up.count, still.count);
+  for (int i = 0; i < still.count; ++i)
+    EXPECT_EQ(up.points[static_cast<std::size_t>(i)].feature, still.points[static_cast<std::size_t>(i)].feature);
+}
+
 TEST(Contact, BoxOnPlane) {
   const ConvexHull box = make_box(Vec3(0.5, 0.25, 0.4));
   const Plane ground;  // y = 0

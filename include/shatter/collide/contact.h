@@ -102,13 +102,19 @@ double hull_separation(const ConvexHull& a, const Transform& ta, const ConvexHul
 ///
 /// With `motion`, the hull's velocity over the coming step: the vertex that this motion, held for
 /// `motion->dt`, takes deepest through the plane (deeper than `motion->depth`) joins the manifold
-/// when it is not in it, in place of its point with the widest gap when it is full. A shard turning fast about the edge it lands on brings its other side down
-/// within the step; those vertices are off the incident face and do not overlap yet.
+/// when it is not in it, in place of its point with the widest gap when it is full. A shard turning
+/// fast about the edge it lands on brings its other side down within the step; those vertices are
+/// off the incident face and do not overlap yet. With the body's inverse mass and inertia, the
+/// motion the landing itself gives counts too: the lowest vertex stopped along the normal (no
+/// bounce), the body then turning about it. A shard falling fast onto one end is swung down onto
+/// its other end within the step, at several times its falling speed.
 struct HullMotion {
   Vec3 linear_velocity = Vec3::Zero();   ///< of the point at ta's origin, world, m/s
   Vec3 angular_velocity = Vec3::Zero();  ///< world, rad/s
   double dt = 0;                         ///< s
   double depth = 0.001;                  ///< m
+  double inverse_mass = 0;               ///< 1/kg (0: the landing's turn is not predicted)
+  Mat3 inverse_inertia = Mat3::Zero();   ///< in the hull's frame, about ta's origin, 1/(kg m^2)
 };
 ContactManifold collide_hull_plane(const ConvexHull& a, const Transform& ta, const Plane& plane,
                                    double speculative_distance, const HullMotion* motion = nullptr);

@@ -575,35 +575,63 @@ ContactManifold collide_hull_plane(const ConvexHull& a, const Transform& ta, con
     // sep - dt n . (v + w x r) with r = R v_i (the hull's frame turned into the world's).
     const Vec3 v = ta.rotation.transpose() * motion->linear_velocity;  // in A's frame
     const Vec3 w = ta.rotation.transpose() * motion->angular_velocity;
-    Index arriving = -1;
-    double lowest = -motion->depth;
-    for (std::size_t i = 0; i < a.vertices.size(); ++i) {
-      const Vec3& p = a.vertices[i];
-      const double sep = n.dot(p) - offset;
-      const double end = sep + motion->dt * n.dot(v + w.cross(p));
-      if (sep <= speculative_distance && end < lowest) {
-        lowest = end;
-        arriving = static_cast<Index>(i);
+    // The landing's own turn: the impulse along n at the lowest vertex that stops its approach
+    // (J = -v_n / (1/m + (r x n) . I^-1 (r x n))), and the motion it leaves.
+    Vec3 landed_v = v, landed_w = w;
+    bool lands = false;
+    if (motion->inverse_mass > 0) {
+      const Vec3& p0 = a.vertices[static_cast<std::size_t>(deepest)];
+      const double vn = n.dot(v + w.cross(p0));
+      const Vec3 rn = p0.cross(n);
+      const Vec3 turn = motion->inverse_inertia * rn;
+      const double k = motion->inverse_mass + rn.dot(turn);
+      if (vn < 0 && k > 0) {
+        const double j = -vn / k;
+        landed_v = v + (j * motion->inverse_mass) * n;
+        landed_w = w + j * turn;
+        lands = true;
       }
     }
-    if (arriving >= 0) {
-      const auto feature = kKindPlane << 30 | (static_cast<std::uint32_t>(arriving) & 0x3fffffffu);
-      const auto held = m.points.begin() + m.count;
-      if (std::none_of(m.points.begin(), held, [feature](const ManifoldPoint& c) { return c.feature == feature; })) {
-        int slot = m.count;
-        if (m.count == 4)
-          slot = static_cast<int>(std::max_element(m.points.begin(), held,
-                                                   [](const ManifoldPoint& x, const ManifoldPoint& y) {
-                                                     return x.separation < y.separation;
-                                                   }) -
-                                  m.points.begin());
-        else
-          ++m.count;
-        const Vec3& p = a.vertices[static_cast<std::size_t>(arriving)];
+    // The vertex each motion takes deepest (deeper than motion->depth), among those within reach.
+    const auto arriving = [&](const Vec3& lin, const Vec3& ang) {
+      Index found = -1;
+      double lowest = -motion->depth;
+      for (std::size_t i = 0; i < a.vertices.size(); ++i) {
+        const Vec3& p = a.vertices[i];
         const double sep = n.dot(p) - offset;
-        m.points[static_cast<std::size_t>(slot)] = {p - 0.5 * sep * n, sep, feature};
+        const double end = sep + motion->dt * n.dot(lin + ang.cross(p));
+        if (sep <= speculative_distance && end < lowest) {
+          lowest = end;
+          found = static_cast<Index>(i);
+        }
       }
-    }
+      return found;
+    };
+    // Held as a point (with its gap at the step's start) unless it is one already; in place of the
+    // point with the widest gap when the manifold is full, never of `keep`.
+    const auto hold = [&](Index vertex, int keep) {
+      if (vertex < 0) return -1;
+      const auto feature = kKindPlane << 30 | (static_cast<std::uint32_t>(vertex) & 0x3fffffffu);
+      const auto held = m.points.begin() + m.count;
+      if (std::any_of(m.points.begin(), held, [feature](const ManifoldPoint& c) { return c.feature == feature; }))
+        return -1;
+      int slot = m.count;
+      if (m.count == 4) {
+        slot = -1;
+        for (int i = 0; i < 4; ++i)
+          if (i != keep && (slot < 0 || m.points[static_cast<std::size_t>(i)].separation >
+                                            m.points[static_cast<std::size_t>(slot)].separation))
+            slot = i;
+      } else {
+        ++m.count;
+      }
+      const Vec3& p = a.vertices[static_cast<std::size_t>(vertex)];
+      const double sep = n.dot(p) - offset;
+      m.points[static_cast<std::size_t>(slot)] = {p - 0.5 * sep * n, sep, feature};
+      return slot;
+    };
+    const int kept = hold(arriving(v, w), -1);
+    if (lands) hold(arriving(landed_v, landed_w), kept);
   }
   for (int i = 0; i < m.count; ++i)
     m.points[static_cast<std::size_t>(i)].point = ta.apply(m.points[static_cast<std::size_t>(i)].point);

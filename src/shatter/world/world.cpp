@@ -736,10 +736,13 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
             return;
           }
           const auto& pieces = body.shape->pieces;
-          const HullMotion motion{.linear_velocity = body.rigid.linear_velocity,
-                                  .angular_velocity = body.rigid.angular_velocity,
-                                  .dt = settings_.time_step,
-                                  .depth = 0.25 * settings_.speculative_distance};
+          const HullMotion motion{
+              .linear_velocity = body.rigid.linear_velocity,
+              .angular_velocity = body.rigid.angular_velocity,
+              .dt = settings_.time_step,
+              .depth = 0.25 * settings_.speculative_distance,
+              .inverse_mass = body.type == BodyType::dynamic ? body.inertia.inverse_mass : 0.0,
+              .inverse_inertia = body.type == BodyType::dynamic ? body.inertia.inverse_inertia_body : Mat3::Zero()};
           const bool moving = body.awake && body.type != BodyType::static_body;
           for (Index i = 0; i < static_cast<Index>(pieces.size()); ++i) {
             ContactManifold m = collide_hull_plane(pieces[i], tbody, plane, margin, moving ? &motion : nullptr);
