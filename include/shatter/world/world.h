@@ -602,6 +602,9 @@ class World {
   /// overlapping boxes (find_pairs).
   std::vector<Aabb> grown_boxes_;
   std::vector<PairRef> grown_pairs_;
+  /// Per body, how much farther than its own motion_bound it may be pushed within the step by the
+  /// bodies its box overlaps (m): added to its reach toward planes (find_pairs).
+  std::vector<double> pushed_;
   std::vector<PairRef> pairs_;
   std::vector<std::vector<Contact>> pair_contacts_;
   std::vector<std::array<std::size_t, 2>> old_ranges_;  ///< per pair: its contacts_ of the last step

@@ -602,6 +602,29 @@ void World::find_pairs(std::vector<PairRef>& pairs) {
   pairs.clear();
   for (const PairRef& p : grown_pairs_)
     if (boxes_overlap(boxes_[p.a], boxes_[p.b])) pairs.push_back(p);
+  // A body struck by a faster one within the step moves about as fast: a slow piece that a blow
+  // drives down reaches the ground in this step although its own motion does not (a 26 g piece
+  // 9 cm up, hit at 16 m/s, went 4.5 cm through the ground). Each body reaches toward the planes
+  // as far as the fastest body its box overlaps, through chains of such bodies.
+  // reach: motion_bound, raised to that of a body it overlaps (copied, so that equal reaches stop
+  // the passes exactly); pushed_: what the reach adds to the body's own bound.
+  std::vector<double>& reach = pushed_;
+  reach.resize(static_cast<std::size_t>(n));
+  for (Index i = 0; i < n; ++i) reach[i] = motion_bound(bodies_[i]);
+  const auto pushable = [&](Index i) { return bodies_[i].type == BodyType::dynamic && bodies_[i].awake; };
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (const PairRef& p : pairs) {
+      if (pushable(p.a) && reach[p.b] > reach[p.a]) {
+        reach[p.a] = reach[p.b];
+        changed = true;
+      } else if (pushable(p.b) && reach[p.a] > reach[p.b]) {
+        reach[p.b] = reach[p.a];
+        changed = true;
+      }
+    }
+  }
+  for (Index i = 0; i < n; ++i) reach[i] -= motion_bound(bodies_[i]);
   for (Index p = 0; p < n; ++p) {
     if (!bodies_[p].is_plane) continue;
     const Plane& plane = bodies_[p].shape->plane;
@@ -610,7 +633,7 @@ void World::find_pairs(std::vector<PairRef>& pairs) {
       const Vec3 centre = 0.5 * (boxes_[i].min + boxes_[i].max);
       const Vec3 half = 0.5 * (boxes_[i].max - boxes_[i].min);
       const double lowest = plane.normal.dot(centre) - plane.normal.cwiseAbs().dot(half) - plane.offset;
-      if (lowest <= half_margin) pairs.push_back({std::min(p, i), std::max(p, i)});
+      if (lowest <= half_margin + pushed_[i]) pairs.push_back({std::min(p, i), std::max(p, i)});
     }
   }
   // Keep pairs with at least one dynamic body and one awake, that the filters allow.
@@ -656,7 +679,9 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
           out.assign(first_old, old_end);
           return;
         }
-        const double spec = settings_.speculative_distance + motion_bound(a) + motion_bound(b);
+        // Toward a plane, a body reaches as far as a body pushing it can take it (find_pairs).
+        const double pushed = (a.is_plane ? pushed_[ib] : 0.0) + (b.is_plane ? pushed_[ia] : 0.0);
+        const double spec = settings_.speculative_distance + motion_bound(a) + motion_bound(b) + pushed;
         const Transform ta = transform_of(a.rigid);
         const Transform tb = transform_of(b.rigid);
         Vec3 offset;
@@ -702,7 +727,9 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
           if (reuse > 0 && !a.deform && !b.deform) {
             origin.offset = offset;
             origin.rotation = rotation;
-            origin.margin = margin;
+            // Reused while the pair's own motion stays within it: what a push added is for this
+            // step only.
+            origin.margin = margin - pushed;
             origin.normal_a = ta.rotation.transpose() * m.normal;
             for (int i = 0; i < m.count; ++i) {
               const Vec3 half_gap = 0.5 * m.points[i].separation * m.normal;
