@@ -568,9 +568,13 @@ void World::find_pairs(std::vector<PairRef>& pairs) {
   const Index n = body_count();
   const double half_margin = 0.5 * settings_.speculative_distance;
   boxes_.resize(n);
+  pushed_.resize(static_cast<std::size_t>(n));  // each body's motion_bound for now (below)
+  double fastest = 0;
   for (Index i = 0; i < n; ++i) {
     const Body& b = bodies_[i];
-    boxes_[i] = b.is_plane || b.removed ? Aabb{} : grow(slot_bounds(i), half_margin + motion_bound(b));
+    pushed_[i] = motion_bound(b);
+    fastest = std::max(fastest, pushed_[i]);
+    boxes_[i] = b.is_plane || b.removed ? Aabb{} : grow(slot_bounds(i), half_margin + pushed_[i]);
   }
   // The grid runs on the boxes grown by a margin, and its pairs are kept while every box stays
   // inside its grown box: two boxes that overlap then have grown boxes that overlap, so the kept
@@ -607,24 +611,27 @@ void World::find_pairs(std::vector<PairRef>& pairs) {
   // 9 cm up, hit at 16 m/s, went 4.5 cm through the ground). Each body reaches toward the planes
   // as far as the fastest body its box overlaps, through chains of such bodies.
   // reach: motion_bound, raised to that of a body it overlaps (copied, so that equal reaches stop
-  // the passes exactly); pushed_: what the reach adds to the body's own bound.
+  // the passes exactly); then pushed_: what the reach adds to the body's own bound. A reach within
+  // the speculative distance pushes nothing (a resting stack needs no passes).
+  const double slow = settings_.speculative_distance;
+  if (!(fastest > slow)) std::fill(pushed_.begin(), pushed_.end(), 0.0);  // nothing pushes
+  const std::vector<double> own = fastest > slow ? pushed_ : std::vector<double>{};
   std::vector<double>& reach = pushed_;
-  reach.resize(static_cast<std::size_t>(n));
-  for (Index i = 0; i < n; ++i) reach[i] = motion_bound(bodies_[i]);
   const auto pushable = [&](Index i) { return bodies_[i].type == BodyType::dynamic && bodies_[i].awake; };
-  for (bool changed = true; changed;) {
+  for (bool changed = fastest > slow; changed;) {
     changed = false;
     for (const PairRef& p : pairs) {
-      if (pushable(p.a) && reach[p.b] > reach[p.a]) {
+      if (pushable(p.a) && reach[p.b] > reach[p.a] && reach[p.b] > slow) {
         reach[p.a] = reach[p.b];
         changed = true;
-      } else if (pushable(p.b) && reach[p.a] > reach[p.b]) {
+      } else if (pushable(p.b) && reach[p.a] > reach[p.b] && reach[p.a] > slow) {
         reach[p.b] = reach[p.a];
         changed = true;
       }
     }
   }
-  for (Index i = 0; i < n; ++i) reach[i] -= motion_bound(bodies_[i]);
+  if (fastest > slow)
+    for (Index i = 0; i < n; ++i) reach[i] -= own[i];
   for (Index p = 0; p < n; ++p) {
     if (!bodies_[p].is_plane) continue;
     const Plane& plane = bodies_[p].shape->plane;
