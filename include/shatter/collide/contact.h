@@ -106,8 +106,9 @@ double hull_separation(const ConvexHull& a, const Transform& ta, const ConvexHul
 /// fast about the edge it lands on brings its other side down within the step; those vertices are
 /// off the incident face and do not overlap yet. With the body's inverse mass and inertia, the
 /// motion the landing itself gives counts too: the lowest vertex stopped along the normal (no
-/// bounce), the body then turning about it. A shard falling fast onto one end is swung down onto
-/// its other end within the step, at several times its falling speed.
+/// bounce), the body then turning about it; the vertex that motion takes deepest joins too, never
+/// in place of the first one. A shard falling fast onto one end is swung down onto its other end
+/// within the step, at several times its falling speed.
 struct HullMotion {
   Vec3 linear_velocity = Vec3::Zero();   ///< of the point at ta's origin, world, m/s
   Vec3 angular_velocity = Vec3::Zero();  ///< world, rad/s

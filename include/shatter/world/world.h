@@ -602,6 +602,7 @@ class World {
   /// overlapping boxes (find_pairs).
   std::vector<Aabb> grown_boxes_;
   std::vector<PairRef> grown_pairs_;
+  std::vector<double> bounds_;  ///< per body: motion_bound at the step's start, m (find_pairs; narrow_phase)
   /// Per body, how much farther than its own motion_bound it may be pushed within the step by the
   /// bodies its box overlaps (m): added to its reach toward planes (find_pairs).
   std::vector<double> pushed_;

@@ -568,13 +568,13 @@ void World::find_pairs(std::vector<PairRef>& pairs) {
   const Index n = body_count();
   const double half_margin = 0.5 * settings_.speculative_distance;
   boxes_.resize(n);
-  pushed_.resize(static_cast<std::size_t>(n));  // each body's motion_bound for now (below)
+  bounds_.resize(static_cast<std::size_t>(n));
   double fastest = 0;
   for (Index i = 0; i < n; ++i) {
     const Body& b = bodies_[i];
-    pushed_[i] = motion_bound(b);
-    fastest = std::max(fastest, pushed_[i]);
-    boxes_[i] = b.is_plane || b.removed ? Aabb{} : grow(slot_bounds(i), half_margin + pushed_[i]);
+    bounds_[i] = motion_bound(b);
+    fastest = std::max(fastest, bounds_[i]);
+    boxes_[i] = b.is_plane || b.removed ? Aabb{} : grow(slot_bounds(i), half_margin + bounds_[i]);
   }
   // The grid runs on the boxes grown by a margin, and its pairs are kept while every box stays
   // inside its grown box: two boxes that overlap then have grown boxes that overlap, so the kept
@@ -610,28 +610,28 @@ void World::find_pairs(std::vector<PairRef>& pairs) {
   // drives down reaches the ground in this step although its own motion does not (a 26 g piece
   // 9 cm up, hit at 16 m/s, went 4.5 cm through the ground). Each body reaches toward the planes
   // as far as the fastest body its box overlaps, through chains of such bodies.
-  // reach: motion_bound, raised to that of a body it overlaps (copied, so that equal reaches stop
-  // the passes exactly); then pushed_: what the reach adds to the body's own bound. A reach within
-  // the speculative distance pushes nothing (a resting stack needs no passes).
-  const double slow = settings_.speculative_distance;
-  if (!(fastest > slow)) std::fill(pushed_.begin(), pushed_.end(), 0.0);  // nothing pushes
-  const std::vector<double> own = fastest > slow ? pushed_ : std::vector<double>{};
-  std::vector<double>& reach = pushed_;
-  const auto pushable = [&](Index i) { return bodies_[i].type == BodyType::dynamic && bodies_[i].awake; };
-  for (bool changed = fastest > slow; changed;) {
-    changed = false;
-    for (const PairRef& p : pairs) {
-      if (pushable(p.a) && reach[p.b] > reach[p.a] && reach[p.b] > slow) {
-        reach[p.a] = reach[p.b];
-        changed = true;
-      } else if (pushable(p.b) && reach[p.a] > reach[p.b] && reach[p.a] > slow) {
-        reach[p.b] = reach[p.a];
-        changed = true;
+  // A reach within the speculative distance pushes nothing: a resting stack needs no passes.
+  pushed_.assign(static_cast<std::size_t>(n), 0.0);
+  if (const double slow = settings_.speculative_distance; fastest > slow) {
+    // Each body's reach starts at its own bound and takes that of a faster body it overlaps
+    // (copied, so that equal reaches end the passes exactly); pushed_ is what it gained.
+    std::vector<double>& reach = pushed_;
+    reach = bounds_;
+    const auto pushable = [&](Index i) { return bodies_[i].type == BodyType::dynamic && bodies_[i].awake; };
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (const PairRef& p : pairs) {
+        if (pushable(p.a) && reach[p.b] > reach[p.a] && reach[p.b] > slow) {
+          reach[p.a] = reach[p.b];
+          changed = true;
+        } else if (pushable(p.b) && reach[p.a] > reach[p.b] && reach[p.a] > slow) {
+          reach[p.b] = reach[p.a];
+          changed = true;
+        }
       }
     }
+    for (Index i = 0; i < n; ++i) reach[i] -= bounds_[i];
   }
-  if (fastest > slow)
-    for (Index i = 0; i < n; ++i) reach[i] -= own[i];
   for (Index p = 0; p < n; ++p) {
     if (!bodies_[p].is_plane) continue;
     const Plane& plane = bodies_[p].shape->plane;
@@ -688,7 +688,7 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
         }
         // Toward a plane, a body reaches as far as a body pushing it can take it (find_pairs).
         const double pushed = (a.is_plane ? pushed_[ib] : 0.0) + (b.is_plane ? pushed_[ia] : 0.0);
-        const double spec = settings_.speculative_distance + motion_bound(a) + motion_bound(b) + pushed;
+        const double spec = settings_.speculative_distance + bounds_[ia] + bounds_[ib] + pushed;
         const Transform ta = transform_of(a.rigid);
         const Transform tb = transform_of(b.rigid);
         Vec3 offset;
@@ -727,7 +727,7 @@ void World::narrow_phase(const std::vector<PairRef>& pairs) {
         // Found afresh, their origin recorded. A pair slow enough that its contacts may be reused
         // next step gets them for gaps `reuse` wider (a pair that moves more cannot reuse them, and
         // would pay for the wider margin in vain).
-        const double margin = reuse > 0 && motion_bound(a) + motion_bound(b) <= reuse ? spec + reuse : spec;
+        const double margin = reuse > 0 && bounds_[ia] + bounds_[ib] <= reuse ? spec + reuse : spec;
         auto add_manifold = [&](const ContactManifold& m, Index pa, Index pb, const SatCache& sat) {
           if (m.count == 0) return;
           ContactOrigin origin;
