@@ -51,6 +51,15 @@ class ContactBatches {
   /// Write the impulses, the step totals and the approach speeds back into the constraints.
   void store() const;
 
+  /// Within a step, for a constraint the caller changes (its points found again): pull() writes
+  /// its lane back into it (as store() does), and reload() packs it again once changed. Constraints
+  /// solved one at a time are read in place: both leave them be. `c` must be one build() took.
+  void pull(const ContactConstraint* c) const;
+  void reload(const ContactConstraint* c, std::span<const SolverBody> bodies);
+  /// A constraint made within the step (prepared), solved one at a time after all the others from
+  /// the next pass on. It must stay where it is until store().
+  void add(ContactConstraint* c) { overflow_.push_back(c); }
+
   /// The constraints of each batch (nullptr in empty lanes), in solving order.
   [[nodiscard]] std::span<const std::array<ContactConstraint*, kLanes>> batches() const { return sources_; }
   /// The colour of each batch.

@@ -439,6 +439,41 @@ void ContactBatches::solve(std::span<SolverBody> bodies, double inverse_h, bool 
   for (ContactConstraint* c : overflow_) solve_contact(*c, bodies, inverse_h, use_bias, max_push_velocity);
 }
 
+void ContactBatches::pull(const ContactConstraint* c) const {
+  for (std::size_t i = 0; i < wide_.size(); ++i)
+    for (int l = 0; l < kLanes; ++l)
+      if (sources_[i][l] == c) {
+        unpack(wide_[i], l, *sources_[i][l]);
+        return;
+      }
+}
+
+void ContactBatches::reload(const ContactConstraint* c, std::span<const SolverBody> bodies) {
+  for (std::size_t i = 0; i < wide_.size(); ++i)
+    for (int l = 0; l < kLanes; ++l)
+      if (sources_[i][l] == c) {
+        // The lane's point slots cleared first (no mass, no impulse): it may now have fewer points.
+        WideContact& w = wide_[i];
+        for (WidePoint& q : w.points) {
+          q.adjusted_separation[l] = 0;
+          set_lane(q.local_anchor_a, l, Vec3::Zero());
+          set_lane(q.local_anchor_b, l, Vec3::Zero());
+          set_lane(q.rn_a, l, Vec3::Zero());
+          set_lane(q.rn_b, l, Vec3::Zero());
+          set_lane(q.ang_a, l, Vec3::Zero());
+          set_lane(q.ang_b, l, Vec3::Zero());
+          q.normal_mass[l] = 0;
+          q.normal_impulse[l] = 0;
+          q.lever_arm[l] = 0;
+          q.approach_speed[l] = 0;
+          q.max_normal_impulse[l] = 0;
+          q.total_normal_impulse[l] = 0;
+        }
+        pack(*c, bodies, l, w);
+        return;
+      }
+}
+
 void ContactBatches::store() const {
   for (std::size_t i = 0; i < wide_.size(); ++i)
     for (int l = 0; l < kLanes; ++l)

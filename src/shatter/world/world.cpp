@@ -990,7 +990,7 @@ void World::solve() {
   stats_.awake_bodies = static_cast<std::int64_t>(moving.size());
 
   // Active constraints: those touching an awake dynamic body.
-  std::vector<ContactConstraint*> active;
+  std::vector<Contact*> active;
   stats_.contact_points = 0;
   for (Contact& c : contacts_) {
     const Body& a = bodies_[c.body_a];
@@ -999,11 +999,12 @@ void World::solve() {
     if (!live) continue;
     c.constraint.body_a = c.body_a;
     c.constraint.body_b = c.body_b;
-    active.push_back(&c.constraint);
+    active.push_back(&c);
     stats_.contact_points += c.constraint.count;
   }
   stats_.contacts = static_cast<std::int64_t>(active.size());
 
+  turned_.resize(n);
   build_solve_groups(active, moving);
   const auto groups = static_cast<std::int64_t>(solve_group_count_);
   stats_.solve_groups = groups;
@@ -1018,14 +1019,31 @@ void World::solve() {
     parallel_for(0, groups, [&](std::int64_t g) { solve_group(solve_groups_[g], h, inverse_h); }, 2);
   else
     for (std::int64_t g = 0; g < groups; ++g) solve_group(solve_groups_[g], h, inverse_h);  // loops inside in parallel
+
+  // The contacts made within the step join the others, in key order (the pointers into contacts_
+  // are not used after the solve).
+  std::vector<Contact> made;
+  for (std::int64_t g = 0; g < groups; ++g) {
+    for (Contact& c : solve_groups_[g].made) made.push_back(std::move(c));
+    solve_groups_[g].made.clear();
+  }
+  if (!made.empty()) {
+    std::sort(made.begin(), made.end(), key_less);
+    std::vector<Contact> merged;
+    merged.reserve(contacts_.size() + made.size());
+    std::merge(std::make_move_iterator(contacts_.begin()), std::make_move_iterator(contacts_.end()),
+               std::make_move_iterator(made.begin()), std::make_move_iterator(made.end()), std::back_inserter(merged),
+               key_less);
+    contacts_.swap(merged);
+  }
 }
 
-void World::build_solve_groups(std::span<ContactConstraint* const> active, std::span<const Index> moving) {
+void World::build_solve_groups(std::span<Contact* const> active, std::span<const Index> moving) {
   const Index n = body_count();
   solve_parent_.resize(n);
   std::iota(solve_parent_.begin(), solve_parent_.end(), 0);
   auto moves = [&](Index i) { return moves_in_solve(bodies_[i]); };
-  for (const ContactConstraint* c : active)
+  for (const Contact* c : active)
     if (moves(c->body_a) && moves(c->body_b)) unite(solve_parent_, c->body_a, c->body_b);
   // Components numbered in the order of their first body; consecutive components fill a group up
   // to solve_group_bodies moving bodies.
@@ -1036,6 +1054,8 @@ void World::build_solve_groups(std::span<ContactConstraint* const> active, std::
     if (solve_groups_.size() <= count) solve_groups_.emplace_back();
     solve_groups_[count].moving.clear();
     solve_groups_[count].constraints.clear();
+    solve_groups_[count].plane_contacts.clear();
+    solve_groups_[count].made.clear();
     ++count;
     filled = 0;
   };
@@ -1049,10 +1069,16 @@ void World::build_solve_groups(std::span<ContactConstraint* const> active, std::
     ++filled;
   }
   solve_group_count_ = count;
-  for (ContactConstraint* c : active) {
+  for (Contact* c : active) {
     // A live constraint has an awake dynamic body (solve), which moves.
     const Index body = moves(c->body_a) ? c->body_a : c->body_b;
-    solve_groups_[group_of_root[find_root(solve_parent_, body)]].constraints.push_back(c);
+    SolveGroup& group = solve_groups_[group_of_root[find_root(solve_parent_, body)]];
+    group.constraints.push_back(&c->constraint);
+    // A plane and a piece of a rigid dynamic body (not the tet mode's points: no piece).
+    const Body& b = bodies_[body];
+    if (bodies_[c->body_a].is_plane != bodies_[c->body_b].is_plane && std::max(c->piece_a, c->piece_b) >= 0 &&
+        b.type == BodyType::dynamic && !b.deform)
+      group.plane_contacts.push_back(c);
   }
 }
 
@@ -1068,6 +1094,7 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
     s.inverse_inertia = responds ? world_inverse_inertia(b.inertia, b.rigid.orientation) : Mat3::Zero();
     s.position = b.rigid.position;
     s.rotation = b.rigid.orientation.toRotationMatrix();
+    turned_[i] = 0;
   }
   // Box3D's choices: the spring at most an eighth of the substep rate; contacts with static and
   // kinematic bodies twice as stiff and half as damped, so nothing is pushed into the ground.
@@ -1147,6 +1174,7 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
   const auto num_moving = static_cast<std::int64_t>(moving.size());
 
   for (int sub = 0; sub < settings_.substeps; ++sub) {
+    if (sub > 0 && !group.plane_contacts.empty()) refresh_plane_contacts(group, sub * h, static_soft);
     parallel_for(
         0, num_moving,
         [&](std::int64_t k) {
@@ -1191,6 +1219,7 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
             SolverBody& s = solver_bodies_[moving[first + k]];
             s.angular_velocity = b.rigid.angular_velocity;
             s.position = b.rigid.position;
+            turned_[moving[first + k]] += h * s.angular_velocity.norm();
           }
         },
         (settings_.parallel_min_bodies + 3) / 4);  // groups: the same threshold in bodies
@@ -1200,10 +1229,159 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
   batches.store();
   for (ContactConstraint* c : group.constraints)
     apply_restitution(*c, solver_bodies_, settings_.contact.restitution_threshold);
+  for (Contact& c : group.made)
+    apply_restitution(c.constraint, solver_bodies_, settings_.contact.restitution_threshold);
   for (const Index i : moving) {
     bodies_[i].rigid.linear_velocity = solver_bodies_[i].linear_velocity;
     bodies_[i].rigid.angular_velocity = solver_bodies_[i].angular_velocity;
   }
+}
+
+void World::refresh_plane_contacts(SolveGroup& group, double elapsed, const Softness& soft) {
+  // A body's plane contacts were found at the step's start, from its pose then, and the solver
+  // holds their points with rows fixed at that pose. A body turned far within the step (a blow, a
+  // hit that spins it) has other vertices come down, where no point is: a piece spun to the
+  // rotation limit went wholly under the ground in one step. Found again when the turn has moved a
+  // vertex farther than its rows foresee: r (1 - cos θ) ~ r θ² / 2 past a quarter of the
+  // speculative distance (the depth at which collide_hull_plane adds a vertex the motion brings).
+  const double spec = settings_.speculative_distance;
+  const double left = settings_.time_step - elapsed;
+  const std::vector<Contact*>& list = group.plane_contacts;
+  std::vector<Index> refreshed;
+  std::vector<Contact*> found;  // the pair's contacts: from the step's start, then those made since
+  for (std::size_t first = 0, last = 0; first < list.size(); first = last) {
+    const Index slot_a = list[first]->body_a, slot_b = list[first]->body_b;
+    for (last = first + 1; last < list.size() && list[last]->body_a == slot_a && list[last]->body_b == slot_b;) ++last;
+    const bool plane_first = bodies_[slot_a].is_plane;
+    const Index slot = plane_first ? slot_b : slot_a;
+    const Body& b = bodies_[slot];
+    const double turn = turned_[slot];
+    if (!(0.5 * turn * turn * b.radius > 0.25 * spec)) continue;
+    refreshed.push_back(slot);
+    found.assign(list.begin() + static_cast<std::ptrdiff_t>(first), list.begin() + static_cast<std::ptrdiff_t>(last));
+    for (Contact& c : group.made)
+      if (c.body_a == slot_a && c.body_b == slot_b) found.push_back(&c);
+    const SolverBody& s = solver_bodies_[slot];
+    const Transform pose{s.rotation, s.position};
+    const Plane& plane = bodies_[plane_first ? slot_a : slot_b].shape->plane;
+    const HullMotion motion{.linear_velocity = s.linear_velocity,
+                            .angular_velocity = s.angular_velocity,
+                            .dt = left,
+                            .depth = 0.25 * spec,
+                            .inverse_mass = b.inertia.inverse_mass,
+                            .inverse_inertia = b.inertia.inverse_inertia_body};
+    // Gaps the rest of the step can close, as the narrow phase's margin.
+    const double margin = spec + left * (s.linear_velocity.norm() + s.angular_velocity.norm() * b.radius);
+    const auto& pieces = b.shape->pieces;
+    for (Index i = 0; i < static_cast<Index>(pieces.size()); ++i) {
+      ContactManifold m = collide_hull_plane(pieces[i], pose, plane, margin, &motion);
+      if (m.count == 0) continue;  // a contact it has keeps its points (their gaps are followed)
+      if (plane_first) m.normal = -m.normal;
+      const auto it = std::find_if(found.begin(), found.end(),
+                                   [&](const Contact* c) { return (plane_first ? c->piece_b : c->piece_a) == i; });
+      if (it == found.end()) {
+        Contact& c = group.made.emplace_back();
+        c.body_a = slot_a;
+        c.body_b = slot_b;
+        c.piece_a = plane_first ? -1 : i;
+        c.piece_b = plane_first ? i : -1;
+        ContactConstraint& cc = c.constraint;
+        cc.body_a = slot_a;
+        cc.body_b = slot_b;
+        cc.normal = m.normal;
+        cc.friction = std::sqrt(bodies_[slot_a].surface.friction * bodies_[slot_b].surface.friction);
+        cc.restitution = std::max(bodies_[slot_a].surface.restitution, bodies_[slot_b].surface.restitution);
+        cc.softness = soft;
+        cc.count = m.count;
+        for (int k = 0; k < m.count; ++k)
+          cc.points[k] = {
+              .position = m.points[k].point, .separation = m.points[k].separation, .feature = m.points[k].feature};
+        prepare_contact(cc, solver_bodies_, spec);
+        group.batches.add(&cc);
+        continue;
+      }
+      // Its points stay as they are, rows and impulses (rows made again at the pose now held a
+      // tripped shard less well: 5 mm deep against 0.3 mm). The new manifold's vertices that lie
+      // deeper than the widest of them join, in place of the widest when full; a point that
+      // leaves hands its step totals to the nearest point, so the impact analysis still sees all
+      // that was given.
+      Contact& c = **it;
+      ContactConstraint& cc = c.constraint;
+      group.batches.pull(&cc);
+      const SolverBody& sa = solver_bodies_[cc.body_a];
+      const SolverBody& sb = solver_bodies_[cc.body_b];
+      // Each point now: its body's surface point, the plane's its projection (the body slides).
+      ContactConstraint now = cc;
+      for (int k = 0; k < now.count; ++k) {
+        ContactPoint& p = now.points[k];
+        const Vec3 on_a = sa.position + sa.rotation * p.local_anchor_a;
+        const Vec3 on_b = sb.position + sb.rotation * p.local_anchor_b;
+        p.separation = p.adjusted_separation + cc.normal.dot(on_b - on_a);
+        p.position =
+            plane_first ? Vec3(on_b - 0.5 * p.separation * cc.normal) : Vec3(on_a + 0.5 * p.separation * cc.normal);
+      }
+      std::array<int, 4> order{0, 1, 2, 3};  // the new manifold's points, deepest first
+      for (int r = 1; r < m.count; ++r)
+        for (int t = r; t > 0 && m.points[order[t]].separation < m.points[order[t - 1]].separation; --t)
+          std::swap(order[t], order[t - 1]);
+      std::array<bool, 4> joined{};
+      // What each slot was handed by points that left (approach speed, largest and total impulse).
+      std::array<Vec3, 4> handed;
+      handed.fill(Vec3::Zero());
+      const auto totals = [&](int k) {
+        const ContactPoint& p = cc.points[k];
+        return Vec3(std::max(p.approach_speed, handed[k].x()), std::max(p.max_normal_impulse, handed[k].y()),
+                    p.total_normal_impulse + handed[k].z());
+      };
+      bool any = false;
+      for (int r = 0; r < m.count; ++r) {
+        const ManifoldPoint& q = m.points[order[r]];
+        if (std::any_of(now.points.begin(), now.points.begin() + now.count,
+                        [&](const ContactPoint& p) { return p.feature == q.feature; }))
+          continue;
+        int at = now.count;
+        if (now.count == 4) {
+          at = -1;
+          for (int k = 0; k < 4; ++k)
+            if (!joined[k] && (at < 0 || now.points[k].separation > now.points[at].separation)) at = k;
+          if (at < 0 || !(q.separation < now.points[at].separation)) break;
+          int to = -1;
+          double nearest = kInfinity;
+          for (int k = 0; k < 4; ++k)
+            if (const double d = (now.points[k].position - now.points[at].position).squaredNorm();
+                k != at && d < nearest) {
+              nearest = d;
+              to = k;
+            }
+          const Vec3 leaving = totals(at);
+          handed[to] = Vec3(std::max(handed[to].x(), leaving.x()), std::max(handed[to].y(), leaving.y()),
+                            handed[to].z() + leaving.z());
+          handed[at].setZero();
+        } else {
+          ++now.count;
+        }
+        now.points[at] = {.position = q.point, .separation = q.separation, .feature = q.feature};
+        joined[at] = true;
+        any = true;
+      }
+      if (!any) continue;
+      // The joining points' rows from a constraint prepared at the pose now; the others, the
+      // friction centre and the friction rows stay.
+      prepare_contact(now, solver_bodies_, spec);
+      cc.count = now.count;
+      for (int k = 0; k < cc.count; ++k) {
+        const Vec3 t = totals(k);  // an old point's own and handed, a joining one's handed
+        if (joined[k]) cc.points[k] = now.points[k];
+        ContactPoint& p = cc.points[k];
+        p.approach_speed = std::max(joined[k] ? p.approach_speed : t.x(), handed[k].x());
+        p.max_normal_impulse = joined[k] ? handed[k].y() : t.y();
+        p.total_normal_impulse = joined[k] ? handed[k].z() : t.z();
+      }
+      c.origin.margin = -1;  // its points no longer those of the origin: found afresh next step
+      group.batches.reload(&cc, solver_bodies_);
+    }
+  }
+  for (const Index slot : refreshed) turned_[slot] = 0;
 }
 
 void World::update_sleep() {
