@@ -1028,7 +1028,11 @@ void World::solve() {
     solve_groups_[g].made.clear();
   }
   if (!made.empty()) {
-    std::sort(made.begin(), made.end(), key_less);
+    stats_.contacts += static_cast<std::int64_t>(made.size());
+    for (const Contact& c : made) stats_.contact_points += c.constraint.count;
+    // A piece may have a made contact beside one from the step's start (same key): the step's
+    // start first, then in the order made.
+    std::stable_sort(made.begin(), made.end(), key_less);
     std::vector<Contact> merged;
     merged.reserve(contacts_.size() + made.size());
     std::merge(std::make_move_iterator(contacts_.begin()), std::make_move_iterator(contacts_.end()),
@@ -1273,113 +1277,108 @@ void World::refresh_plane_contacts(SolveGroup& group, double elapsed, const Soft
     // Gaps the rest of the step can close, as the narrow phase's margin.
     const double margin = spec + left * (s.linear_velocity.norm() + s.angular_velocity.norm() * b.radius);
     const auto& pieces = b.shape->pieces;
+    bool changed = false;
     for (Index i = 0; i < static_cast<Index>(pieces.size()); ++i) {
       ContactManifold m = collide_hull_plane(pieces[i], pose, plane, margin, &motion);
-      if (m.count == 0) continue;  // a contact it has keeps its points (their gaps are followed)
+      if (m.count == 0) continue;  // the contacts it has keep their points (their gaps are followed)
       if (plane_first) m.normal = -m.normal;
-      const auto it = std::find_if(found.begin(), found.end(),
-                                   [&](const Contact* c) { return (plane_first ? c->piece_b : c->piece_a) == i; });
-      if (it == found.end()) {
-        Contact& c = group.made.emplace_back();
-        c.body_a = slot_a;
-        c.body_b = slot_b;
-        c.piece_a = plane_first ? -1 : i;
-        c.piece_b = plane_first ? i : -1;
-        ContactConstraint& cc = c.constraint;
-        cc.body_a = slot_a;
-        cc.body_b = slot_b;
-        cc.normal = m.normal;
-        cc.friction = std::sqrt(bodies_[slot_a].surface.friction * bodies_[slot_b].surface.friction);
-        cc.restitution = std::max(bodies_[slot_a].surface.restitution, bodies_[slot_b].surface.restitution);
-        cc.softness = soft;
-        cc.count = m.count;
-        for (int k = 0; k < m.count; ++k)
-          cc.points[k] = {
-              .position = m.points[k].point, .separation = m.points[k].separation, .feature = m.points[k].feature};
-        prepare_contact(cc, solver_bodies_, spec);
-        group.batches.add(&cc);
-        continue;
+      // The new manifold's points, deepest first; those the piece's contacts hold already go.
+      std::array<ManifoldPoint, 4> fresh{};
+      int fresh_count = 0;
+      for (int k = 0; k < m.count; ++k) {
+        const ManifoldPoint& q = m.points[k];
+        const bool held = std::any_of(found.begin(), found.end(), [&](const Contact* c) {
+          return (plane_first ? c->piece_b : c->piece_a) == i &&
+                 std::any_of(c->constraint.points.begin(), c->constraint.points.begin() + c->constraint.count,
+                             [&](const ContactPoint& p) { return p.feature == q.feature; });
+        });
+        if (held) continue;
+        int at = fresh_count++;
+        for (; at > 0 && q.separation < fresh[at - 1].separation; --at) fresh[at] = fresh[at - 1];
+        fresh[at] = q;
       }
-      // Its points stay as they are, rows and impulses (rows made again at the pose now held a
-      // tripped shard less well: 5 mm deep against 0.3 mm). The new manifold's vertices that lie
-      // deeper than the widest of them join, in place of the widest when full; a point that
-      // leaves hands its step totals to the nearest point, so the impact analysis still sees all
-      // that was given.
-      Contact& c = **it;
-      ContactConstraint& cc = c.constraint;
-      group.batches.pull(&cc);
-      const SolverBody& sa = solver_bodies_[cc.body_a];
-      const SolverBody& sb = solver_bodies_[cc.body_b];
-      // Each point now: its body's surface point, the plane's its projection (the body slides).
-      ContactConstraint now = cc;
-      for (int k = 0; k < now.count; ++k) {
-        ContactPoint& p = now.points[k];
-        const Vec3 on_a = sa.position + sa.rotation * p.local_anchor_a;
-        const Vec3 on_b = sb.position + sb.rotation * p.local_anchor_b;
-        p.separation = p.adjusted_separation + cc.normal.dot(on_b - on_a);
-        p.position =
-            plane_first ? Vec3(on_b - 0.5 * p.separation * cc.normal) : Vec3(on_a + 0.5 * p.separation * cc.normal);
-      }
-      std::array<int, 4> order{0, 1, 2, 3};  // the new manifold's points, deepest first
-      for (int r = 1; r < m.count; ++r)
-        for (int t = r; t > 0 && m.points[order[t]].separation < m.points[order[t - 1]].separation; --t)
-          std::swap(order[t], order[t - 1]);
-      std::array<bool, 4> joined{};
-      // What each slot was handed by points that left (approach speed, largest and total impulse).
-      std::array<Vec3, 4> handed;
-      handed.fill(Vec3::Zero());
-      const auto totals = [&](int k) {
-        const ContactPoint& p = cc.points[k];
-        return Vec3(std::max(p.approach_speed, handed[k].x()), std::max(p.max_normal_impulse, handed[k].y()),
-                    p.total_normal_impulse + handed[k].z());
-      };
-      bool any = false;
-      for (int r = 0; r < m.count; ++r) {
-        const ManifoldPoint& q = m.points[order[r]];
-        if (std::any_of(now.points.begin(), now.points.begin() + now.count,
-                        [&](const ContactPoint& p) { return p.feature == q.feature; }))
-          continue;
-        int at = now.count;
-        if (now.count == 4) {
-          at = -1;
-          for (int k = 0; k < 4; ++k)
-            if (!joined[k] && (at < 0 || now.points[k].separation > now.points[at].separation)) at = k;
-          if (at < 0 || !(q.separation < now.points[at].separation)) break;
-          int to = -1;
-          double nearest = kInfinity;
-          for (int k = 0; k < 4; ++k)
-            if (const double d = (now.points[k].position - now.points[at].position).squaredNorm();
-                k != at && d < nearest) {
-              nearest = d;
-              to = k;
-            }
-          const Vec3 leaving = totals(at);
-          handed[to] = Vec3(std::max(handed[to].x(), leaving.x()), std::max(handed[to].y(), leaving.y()),
-                            handed[to].z() + leaving.z());
-          handed[at].setZero();
-        } else {
-          ++now.count;
+      int next = 0;  // the first of `fresh` not placed yet
+      // Into the piece's contacts: a free slot, or the slot of the widest point that has carried no
+      // load in the step (a speculative point; its impulses and totals are all zero) when it lies
+      // less deep. A point that carried load stays, with its rows and impulses: the warm start holds
+      // the body up, and its totals and approach speed are the impact analysis's (rows made again
+      // at the pose now held a tripped shard less well: 5 mm deep against 0.3 mm).
+      for (Contact* c : found) {
+        if ((plane_first ? c->piece_b : c->piece_a) != i || next == fresh_count) continue;
+        ContactConstraint& cc = c->constraint;
+        group.batches.pull(&cc);
+        const SolverBody& sa = solver_bodies_[cc.body_a];
+        const SolverBody& sb = solver_bodies_[cc.body_b];
+        // Each point now: its body's surface point, the plane's its projection (the body slides).
+        ContactConstraint now = cc;
+        for (int k = 0; k < now.count; ++k) {
+          ContactPoint& p = now.points[k];
+          const Vec3 on_a = sa.position + sa.rotation * p.local_anchor_a;
+          const Vec3 on_b = sb.position + sb.rotation * p.local_anchor_b;
+          p.separation = p.adjusted_separation + cc.normal.dot(on_b - on_a);
+          p.position =
+              plane_first ? Vec3(on_b - 0.5 * p.separation * cc.normal) : Vec3(on_a + 0.5 * p.separation * cc.normal);
         }
-        now.points[at] = {.position = q.point, .separation = q.separation, .feature = q.feature};
-        joined[at] = true;
-        any = true;
+        std::array<bool, 4> joined{};
+        for (; next < fresh_count; ++next) {
+          const ManifoldPoint& q = fresh[next];
+          int at = now.count;
+          if (now.count == 4) {
+            at = -1;
+            for (int k = 0; k < 4; ++k) {
+              const ContactPoint& p = cc.points[k];
+              if (!joined[k] && p.total_normal_impulse == 0 && p.max_normal_impulse == 0 &&
+                  (at < 0 || now.points[k].separation > now.points[at].separation))
+                at = k;
+            }
+            if (at < 0 || !(q.separation < now.points[at].separation)) break;
+          } else {
+            ++now.count;
+          }
+          now.points[at] = {.position = q.point, .separation = q.separation, .feature = q.feature};
+          joined[at] = true;
+        }
+        if (std::none_of(joined.begin(), joined.end(), [](bool j) { return j; })) continue;
+        // The joining points' rows from the constraint prepared at the pose now; the other points,
+        // the friction centre and the friction rows stay (the twist's lever arms from the centre on
+        // the plane, which does not move).
+        prepare_contact(now, solver_bodies_, spec);
+        cc.count = now.count;
+        for (int k = 0; k < cc.count; ++k) {
+          if (!joined[k]) continue;
+          cc.points[k] = now.points[k];
+          cc.points[k].lever_arm =
+              plane_first ? (cc.points[k].anchor_a - cc.centre_a).norm() : (cc.points[k].anchor_b - cc.centre_b).norm();
+        }
+        group.batches.reload(&cc, solver_bodies_);
+        changed = true;
       }
-      if (!any) continue;
-      // The joining points' rows from a constraint prepared at the pose now; the others, the
-      // friction centre and the friction rows stay.
-      prepare_contact(now, solver_bodies_, spec);
-      cc.count = now.count;
-      for (int k = 0; k < cc.count; ++k) {
-        const Vec3 t = totals(k);  // an old point's own and handed, a joining one's handed
-        if (joined[k]) cc.points[k] = now.points[k];
-        ContactPoint& p = cc.points[k];
-        p.approach_speed = std::max(joined[k] ? p.approach_speed : t.x(), handed[k].x());
-        p.max_normal_impulse = joined[k] ? handed[k].y() : t.y();
-        p.total_normal_impulse = joined[k] ? handed[k].z() : t.z();
-      }
-      c.origin.margin = -1;  // its points no longer those of the origin: found afresh next step
-      group.batches.reload(&cc, solver_bodies_);
+      if (next == fresh_count) continue;
+      // What found no place: a contact of its own, solved one at a time after the others.
+      Contact& c = group.made.emplace_back();
+      c.body_a = slot_a;
+      c.body_b = slot_b;
+      c.piece_a = plane_first ? -1 : i;
+      c.piece_b = plane_first ? i : -1;
+      ContactConstraint& cc = c.constraint;
+      cc.body_a = slot_a;
+      cc.body_b = slot_b;
+      cc.normal = m.normal;
+      cc.friction = std::sqrt(bodies_[slot_a].surface.friction * bodies_[slot_b].surface.friction);
+      cc.restitution = std::max(bodies_[slot_a].surface.restitution, bodies_[slot_b].surface.restitution);
+      cc.softness = soft;
+      for (; next < fresh_count; ++next)
+        cc.points[cc.count++] = {
+            .position = fresh[next].point, .separation = fresh[next].separation, .feature = fresh[next].feature};
+      prepare_contact(cc, solver_bodies_, spec);
+      group.batches.add(&cc);
+      found.push_back(&c);
+      changed = true;
     }
+    // The pair's contacts are no longer those of their origin (a pair reuses its contacts on its
+    // first one's): found afresh next step.
+    if (changed)
+      for (Contact* c : found) c->origin.margin = -1;
   }
   for (const Index slot : refreshed) turned_[slot] = 0;
 }
