@@ -15,6 +15,7 @@
 #include <array>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "shatter/rigid/contact_solver.h"
@@ -54,7 +55,7 @@ class ContactBatches {
   /// Within a step, for a constraint the caller changes (its points found again): pull() writes
   /// its lane back into it (as store() does), and reload() packs it again once changed. Constraints
   /// solved one at a time are read in place: both leave them be. `c` must be one build() took.
-  void pull(const ContactConstraint* c) const;
+  void pull(const ContactConstraint* c);
   void reload(const ContactConstraint* c, std::span<const SolverBody> bodies);
   /// A constraint made within the step (prepared), solved one at a time after all the others from
   /// the next pass on. It must stay where it is until store().
@@ -74,6 +75,10 @@ class ContactBatches {
   std::vector<ContactConstraint*> overflow_;
   std::array<std::vector<ContactConstraint*>, kColours> colour_;
   std::vector<std::uint64_t> used_;  // per colour, one bit per body
+  /// The lane of each batched constraint, by address, for pull and reload: made on the first call
+  /// after build() (a lookup only; the order of the passes never depends on it).
+  std::vector<std::pair<const ContactConstraint*, std::size_t>> lanes_;
+  [[nodiscard]] std::size_t lane_of(const ContactConstraint* c);  // batch * kLanes + lane, or npos
 };
 
 }  // namespace shatter

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 
 #include "shatter/core/lanes.h"
 #include "shatter/core/simd.h"
@@ -370,6 +371,7 @@ void ContactBatches::build(std::span<ContactConstraint* const> constraints, std:
   used_.assign(kColours * words, 0);
   for (auto& c : colour_) c.clear();
   overflow_.clear();
+  lanes_.clear();
   // A body is free in colour k when its bit is clear; bodies that take no impulses are free in all.
   auto free_in = [&](int k, Index body, bool responds) {
     return !responds || (used_[k * words + static_cast<std::size_t>(body) / 64] >> (body % 64) & 1U) == 0;
@@ -439,39 +441,46 @@ void ContactBatches::solve(std::span<SolverBody> bodies, double inverse_h, bool 
   for (ContactConstraint* c : overflow_) solve_contact(*c, bodies, inverse_h, use_bias, max_push_velocity);
 }
 
-void ContactBatches::pull(const ContactConstraint* c) const {
-  for (std::size_t i = 0; i < wide_.size(); ++i)
-    for (int l = 0; l < kLanes; ++l)
-      if (sources_[i][l] == c) {
-        unpack(wide_[i], l, *sources_[i][l]);
-        return;
-      }
+std::size_t ContactBatches::lane_of(const ContactConstraint* c) {
+  const auto by_address = [](const auto& x, const auto& y) { return std::less<>{}(x.first, y.first); };
+  if (lanes_.empty() && !sources_.empty()) {
+    for (std::size_t i = 0; i < sources_.size(); ++i)
+      for (int l = 0; l < kLanes; ++l)
+        if (sources_[i][l] != nullptr) lanes_.emplace_back(sources_[i][l], i * kLanes + l);
+    std::sort(lanes_.begin(), lanes_.end(), by_address);
+  }
+  const auto it = std::lower_bound(lanes_.begin(), lanes_.end(), std::pair{c, std::size_t{0}}, by_address);
+  return it != lanes_.end() && it->first == c ? it->second : static_cast<std::size_t>(-1);
+}
+
+void ContactBatches::pull(const ContactConstraint* c) {
+  const std::size_t at = lane_of(c);
+  if (at == static_cast<std::size_t>(-1)) return;  // solved one at a time, in place
+  unpack(wide_[at / kLanes], static_cast<int>(at % kLanes), *sources_[at / kLanes][at % kLanes]);
 }
 
 void ContactBatches::reload(const ContactConstraint* c, std::span<const SolverBody> bodies) {
-  for (std::size_t i = 0; i < wide_.size(); ++i)
-    for (int l = 0; l < kLanes; ++l)
-      if (sources_[i][l] == c) {
-        // The lane's point slots cleared first (no mass, no impulse): it may now have fewer points.
-        WideContact& w = wide_[i];
-        for (WidePoint& q : w.points) {
-          q.adjusted_separation[l] = 0;
-          set_lane(q.local_anchor_a, l, Vec3::Zero());
-          set_lane(q.local_anchor_b, l, Vec3::Zero());
-          set_lane(q.rn_a, l, Vec3::Zero());
-          set_lane(q.rn_b, l, Vec3::Zero());
-          set_lane(q.ang_a, l, Vec3::Zero());
-          set_lane(q.ang_b, l, Vec3::Zero());
-          q.normal_mass[l] = 0;
-          q.normal_impulse[l] = 0;
-          q.lever_arm[l] = 0;
-          q.approach_speed[l] = 0;
-          q.max_normal_impulse[l] = 0;
-          q.total_normal_impulse[l] = 0;
-        }
-        pack(*c, bodies, l, w);
-        return;
-      }
+  const std::size_t at = lane_of(c);
+  if (at == static_cast<std::size_t>(-1)) return;
+  WideContact& w = wide_[at / kLanes];
+  const int l = static_cast<int>(at % kLanes);
+  // The lane's point slots cleared first (no mass, no impulse): it may now have fewer points.
+  for (WidePoint& q : w.points) {
+    q.adjusted_separation[l] = 0;
+    set_lane(q.local_anchor_a, l, Vec3::Zero());
+    set_lane(q.local_anchor_b, l, Vec3::Zero());
+    set_lane(q.rn_a, l, Vec3::Zero());
+    set_lane(q.rn_b, l, Vec3::Zero());
+    set_lane(q.ang_a, l, Vec3::Zero());
+    set_lane(q.ang_b, l, Vec3::Zero());
+    q.normal_mass[l] = 0;
+    q.normal_impulse[l] = 0;
+    q.lever_arm[l] = 0;
+    q.approach_speed[l] = 0;
+    q.max_normal_impulse[l] = 0;
+    q.total_normal_impulse[l] = 0;
+  }
+  pack(*c, bodies, l, w);
 }
 
 void ContactBatches::store() const {
