@@ -629,11 +629,12 @@ class World {
     /// order of contacts_.
     std::vector<std::pair<ContactConstraint*, bool>> shock;
     std::vector<std::pair<ContactConstraint*, bool>> shock_support;
-    /// The contacts between a plane and a piece of a rigid body, in the order of contacts_: found
-    /// again within the step when the body turns far (refresh_plane_contacts).
-    std::vector<Contact*> plane_contacts;
-    /// Contacts made within the step for pieces that had none with the plane; a deque, so that
-    /// the solver's pointers to them hold. Merged into contacts_ after the solve.
+    /// The contacts between a static body (a plane, convex pieces) and a piece of a rigid body,
+    /// in the order of contacts_: found again within the step when the body turns far
+    /// (refresh_static_contacts).
+    std::vector<Contact*> static_contacts;
+    /// Contacts made within the step for points that found no place in the step's; a deque, so
+    /// that the solver's pointers to them hold. Merged into contacts_ after the solve.
     std::deque<Contact> made;
   };
   std::vector<SolveGroup> solve_groups_;  ///< the first solve_group_count_ are this step's
@@ -646,11 +647,11 @@ class World {
   static bool moves_in_solve(const Body& b) { return b.awake && b.type != BodyType::static_body; }
   void build_solve_groups(std::span<Contact* const> active, std::span<const Index> moving);
   void solve_group(SolveGroup& group, double h, double inverse_h);
-  /// Within a group's step, after `elapsed` seconds of it: the plane contacts of each body that
-  /// has turned far since they were found, found again at its pose now (docs/method.md, "No
-  /// tunnelling"). `soft`: the softness of contacts with static bodies.
-  void refresh_plane_contacts(SolveGroup& group, double elapsed, const Softness& soft);
-  /// Per body: the angle it turned (rad) since its plane contacts were found in this step.
+  /// Within a group's step, after `elapsed` seconds of it: the contacts with static bodies of each
+  /// body that has turned far since they were found, found again at its pose now (docs/method.md,
+  /// "No tunnelling"). `soft`: the softness of contacts with static bodies.
+  void refresh_static_contacts(SolveGroup& group, double elapsed, const Softness& soft);
+  /// Per body: the angle it turned (rad) since its static contacts were found in this step.
   std::vector<double> turned_;
   std::vector<Index> island_parent_;
   std::vector<Index> island_of_;

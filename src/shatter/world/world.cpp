@@ -1060,7 +1060,7 @@ void World::build_solve_groups(std::span<Contact* const> active, std::span<const
     if (solve_groups_.size() <= count) solve_groups_.emplace_back();
     solve_groups_[count].moving.clear();
     solve_groups_[count].constraints.clear();
-    solve_groups_[count].plane_contacts.clear();
+    solve_groups_[count].static_contacts.clear();
     solve_groups_[count].made.clear();
     ++count;
     filled = 0;
@@ -1080,11 +1080,15 @@ void World::build_solve_groups(std::span<Contact* const> active, std::span<const
     const Index body = moves(c->body_a) ? c->body_a : c->body_b;
     SolveGroup& group = solve_groups_[group_of_root[find_root(solve_parent_, body)]];
     group.constraints.push_back(&c->constraint);
-    // A plane and a piece of a rigid dynamic body (not the tet mode's points: no piece).
+    // A static body (a plane or convex pieces) and a piece of a rigid dynamic body (not the tet
+    // mode's points: no piece).
     const Body& b = bodies_[body];
-    if (bodies_[c->body_a].is_plane != bodies_[c->body_b].is_plane && std::max(c->piece_a, c->piece_b) >= 0 &&
-        b.type == BodyType::dynamic && !b.deform)
-      group.plane_contacts.push_back(c);
+    const Body& other = bodies_[c->body_a == body ? c->body_b : c->body_a];
+    const Index other_piece = c->body_a == body ? c->piece_b : c->piece_a;
+    const Index piece = c->body_a == body ? c->piece_a : c->piece_b;
+    if (b.type == BodyType::dynamic && !b.deform && piece >= 0 && other.type == BodyType::static_body &&
+        (other.is_plane || other_piece >= 0))
+      group.static_contacts.push_back(c);
   }
 }
 
@@ -1180,7 +1184,7 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
   const auto num_moving = static_cast<std::int64_t>(moving.size());
 
   for (int sub = 0; sub < settings_.substeps; ++sub) {
-    if (sub > 0 && !group.plane_contacts.empty()) refresh_plane_contacts(group, sub * h, static_soft);
+    if (sub > 0 && !group.static_contacts.empty()) refresh_static_contacts(group, sub * h, static_soft);
     parallel_for(
         0, num_moving,
         [&](std::int64_t k) {
@@ -1243,24 +1247,26 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
   }
 }
 
-void World::refresh_plane_contacts(SolveGroup& group, double elapsed, const Softness& soft) {
-  // A body's plane contacts were found at the step's start, from its pose then, and the solver
-  // holds their points with rows fixed at that pose. A body turned far within the step (a blow, a
-  // hit that spins it) has other vertices come down, where no point is: a piece spun to the
-  // rotation limit went wholly under the ground in one step. Found again when the turn has moved a
-  // vertex farther than its rows foresee: r (1 - cos θ) ~ r θ² / 2 past a quarter of the
-  // speculative distance (the depth at which collide_hull_plane adds a vertex the motion brings).
+void World::refresh_static_contacts(SolveGroup& group, double elapsed, const Softness& soft) {
+  // A body's contacts with the static world were found at the step's start, from its pose then,
+  // and the solver holds their points with rows fixed at that pose. A body turned far within the
+  // step (a blow, a landing that trips it) has other vertices come down, where no point is: a
+  // piece spun to the rotation limit went wholly under the ground in one step. Found again when
+  // the turn has moved a vertex farther than its rows foresee: r (1 - cos θ) ~ r θ² / 2 past a
+  // quarter of the speculative distance (the depth at which collide_hull_plane adds a vertex the
+  // motion brings).
   const double spec = settings_.speculative_distance;
   const double left = settings_.time_step - elapsed;
-  const std::vector<Contact*>& list = group.plane_contacts;
+  const std::vector<Contact*>& list = group.static_contacts;
   std::vector<Index> refreshed;
   std::vector<Contact*> found;  // the pair's contacts: from the step's start, then those made since
   for (std::size_t first = 0, last = 0; first < list.size(); first = last) {
     const Index slot_a = list[first]->body_a, slot_b = list[first]->body_b;
     for (last = first + 1; last < list.size() && list[last]->body_a == slot_a && list[last]->body_b == slot_b;) ++last;
-    const bool plane_first = bodies_[slot_a].is_plane;
-    const Index slot = plane_first ? slot_b : slot_a;
+    const bool static_first = bodies_[slot_a].type == BodyType::static_body;
+    const Index slot = static_first ? slot_b : slot_a;
     const Body& b = bodies_[slot];
+    const Body& fixed = bodies_[static_first ? slot_a : slot_b];
     const double turn = turned_[slot];
     if (!(0.5 * turn * turn * b.radius > 0.25 * spec)) continue;
     refreshed.push_back(slot);
@@ -1269,28 +1275,21 @@ void World::refresh_plane_contacts(SolveGroup& group, double elapsed, const Soft
       if (c.body_a == slot_a && c.body_b == slot_b) found.push_back(&c);
     const SolverBody& s = solver_bodies_[slot];
     const Transform pose{s.rotation, s.position};
-    const Plane& plane = bodies_[plane_first ? slot_a : slot_b].shape->plane;
-    const HullMotion motion{.linear_velocity = s.linear_velocity,
-                            .angular_velocity = s.angular_velocity,
-                            .dt = left,
-                            .depth = 0.25 * spec,
-                            .inverse_mass = b.inertia.inverse_mass,
-                            .inverse_inertia = b.inertia.inverse_inertia_body};
     // Gaps the rest of the step can close, as the narrow phase's margin.
     const double margin = spec + left * (s.linear_velocity.norm() + s.angular_velocity.norm() * b.radius);
-    const auto& pieces = b.shape->pieces;
     bool changed = false;
-    for (Index i = 0; i < static_cast<Index>(pieces.size()); ++i) {
-      ContactManifold m = collide_hull_plane(pieces[i], pose, plane, margin, &motion);
-      if (m.count == 0) continue;  // the contacts it has keep their points (their gaps are followed)
-      if (plane_first) m.normal = -m.normal;
-      // The new manifold's points, deepest first; those the piece's contacts hold already go.
+    // The manifold `m` (its normal from A to B) of the pieces `piece_a`, `piece_b` at the pose now,
+    // merged into the pair's contacts.
+    const auto place = [&](const ContactManifold& m, Index piece_a, Index piece_b) {
+      if (m.count == 0) return;  // the contacts it has keep their points (their gaps are followed)
+      const auto same_pieces = [&](const Contact* c) { return c->piece_a == piece_a && c->piece_b == piece_b; };
+      // The new manifold's points, deepest first; those the pieces' contacts hold already go.
       std::array<ManifoldPoint, 4> fresh{};
       int fresh_count = 0;
       for (int k = 0; k < m.count; ++k) {
         const ManifoldPoint& q = m.points[k];
         const bool held = std::any_of(found.begin(), found.end(), [&](const Contact* c) {
-          return (plane_first ? c->piece_b : c->piece_a) == i &&
+          return same_pieces(c) &&
                  std::any_of(c->constraint.points.begin(), c->constraint.points.begin() + c->constraint.count,
                              [&](const ContactPoint& p) { return p.feature == q.feature; });
         });
@@ -1300,18 +1299,20 @@ void World::refresh_plane_contacts(SolveGroup& group, double elapsed, const Soft
         fresh[at] = q;
       }
       int next = 0;  // the first of `fresh` not placed yet
-      // Into the piece's contacts: a free slot, or the slot of the widest point that has carried no
-      // load in the step (a speculative point; its impulses and totals are all zero) when it lies
-      // less deep. A point that carried load stays, with its rows and impulses: the warm start holds
-      // the body up, and its totals and approach speed are the impact analysis's (rows made again
-      // at the pose now held a tripped shard less well: 5 mm deep against 0.3 mm).
+      // Into a contact of the pieces with the same normal: a free slot, or the slot of the widest
+      // point that has carried no load in the step (a speculative point; its impulses and totals
+      // are all zero) when it lies less deep. A point that carried load stays, with its rows and
+      // impulses: the warm start holds the body up, and its totals and approach speed are the
+      // impact analysis's (rows made again at the pose now held a tripped shard less well: 5 mm
+      // deep against 0.3 mm).
       for (Contact* c : found) {
-        if ((plane_first ? c->piece_b : c->piece_a) != i || next == fresh_count) continue;
+        if (!same_pieces(c) || next == fresh_count || !(c->constraint.normal.dot(m.normal) > 1 - 1e-9)) continue;
         ContactConstraint& cc = c->constraint;
         group.batches.pull(&cc);
         const SolverBody& sa = solver_bodies_[cc.body_a];
         const SolverBody& sb = solver_bodies_[cc.body_b];
-        // Each point now: its body's surface point, the plane's its projection (the body slides).
+        // Each point now: the moving body's surface point, the static one's its projection (the
+        // body slides on it).
         ContactConstraint now = cc;
         for (int k = 0; k < now.count; ++k) {
           ContactPoint& p = now.points[k];
@@ -1319,7 +1320,7 @@ void World::refresh_plane_contacts(SolveGroup& group, double elapsed, const Soft
           const Vec3 on_b = sb.position + sb.rotation * p.local_anchor_b;
           p.separation = p.adjusted_separation + cc.normal.dot(on_b - on_a);
           p.position =
-              plane_first ? Vec3(on_b - 0.5 * p.separation * cc.normal) : Vec3(on_a + 0.5 * p.separation * cc.normal);
+              static_first ? Vec3(on_b - 0.5 * p.separation * cc.normal) : Vec3(on_a + 0.5 * p.separation * cc.normal);
         }
         std::array<bool, 4> joined{};
         for (; next < fresh_count; ++next) {
@@ -1343,25 +1344,25 @@ void World::refresh_plane_contacts(SolveGroup& group, double elapsed, const Soft
         if (std::none_of(joined.begin(), joined.end(), [](bool j) { return j; })) continue;
         // The joining points' rows from the constraint prepared at the pose now; the other points,
         // the friction centre and the friction rows stay (the twist's lever arms from the centre on
-        // the plane, which does not move).
+        // the static body, which does not move).
         prepare_contact(now, solver_bodies_, spec);
         cc.count = now.count;
         for (int k = 0; k < cc.count; ++k) {
           if (!joined[k]) continue;
           cc.points[k] = now.points[k];
-          cc.points[k].lever_arm =
-              plane_first ? (cc.points[k].anchor_a - cc.centre_a).norm() : (cc.points[k].anchor_b - cc.centre_b).norm();
+          cc.points[k].lever_arm = static_first ? (cc.points[k].anchor_a - cc.centre_a).norm()
+                                                : (cc.points[k].anchor_b - cc.centre_b).norm();
         }
         group.batches.reload(&cc, solver_bodies_);
         changed = true;
       }
-      if (next == fresh_count) continue;
+      if (next == fresh_count) return;
       // What found no place: a contact of its own, solved one at a time after the others.
       Contact& c = group.made.emplace_back();
       c.body_a = slot_a;
       c.body_b = slot_b;
-      c.piece_a = plane_first ? -1 : i;
-      c.piece_b = plane_first ? i : -1;
+      c.piece_a = piece_a;
+      c.piece_b = piece_b;
       ContactConstraint& cc = c.constraint;
       cc.body_a = slot_a;
       cc.body_b = slot_b;
@@ -1376,6 +1377,37 @@ void World::refresh_plane_contacts(SolveGroup& group, double elapsed, const Soft
       group.batches.add(&cc);
       found.push_back(&c);
       changed = true;
+    };
+    const auto& pieces = b.shape->pieces;
+    if (fixed.is_plane) {
+      const HullMotion motion{.linear_velocity = s.linear_velocity,
+                              .angular_velocity = s.angular_velocity,
+                              .dt = left,
+                              .depth = 0.25 * spec,
+                              .inverse_mass = b.inertia.inverse_mass,
+                              .inverse_inertia = b.inertia.inverse_inertia_body};
+      for (Index i = 0; i < static_cast<Index>(pieces.size()); ++i) {
+        ContactManifold m = collide_hull_plane(pieces[i], pose, fixed.shape->plane, margin, &motion);
+        if (static_first) m.normal = -m.normal;  // from the plane (A) to the hull (B)
+        place(m, static_first ? -1 : i, static_first ? i : -1);
+      }
+    } else {
+      // Each piece against the static body's pieces whose boxes its box (grown by the margin) meets.
+      const Transform held = transform_of(fixed.rigid);
+      const auto& fixed_pieces = fixed.shape->pieces;
+      for (Index i = 0; i < static_cast<Index>(pieces.size()); ++i) {
+        const Aabb box = grow(transform_box(pieces[i].bounds, pose), margin);
+        for (Index j = 0; j < static_cast<Index>(fixed_pieces.size()); ++j) {
+          if (!boxes_overlap(box, transform_box(fixed_pieces[j].bounds, held))) continue;
+          const Index piece_a = static_first ? j : i, piece_b = static_first ? i : j;
+          SatCache sat;
+          for (const Contact* c : found)
+            if (c->piece_a == piece_a && c->piece_b == piece_b) sat = c->sat;
+          const ContactManifold m = static_first ? collide_hulls(fixed_pieces[j], held, pieces[i], pose, margin, &sat)
+                                                 : collide_hulls(pieces[i], pose, fixed_pieces[j], held, margin, &sat);
+          place(m, piece_a, piece_b);
+        }
+      }
     }
     // The pair's contacts are no longer those of their origin (a pair reuses its contacts on its
     // first one's): found afresh next step.
