@@ -1280,7 +1280,7 @@ void World::refresh_static_contacts(SolveGroup& group, double elapsed, const Sof
     bool changed = false;
     // The manifold `m` (its normal from A to B) of the pieces `piece_a`, `piece_b` at the pose now,
     // merged into the pair's contacts.
-    const auto place = [&](const ContactManifold& m, Index piece_a, Index piece_b) {
+    const auto place = [&](const ContactManifold& m, Index piece_a, Index piece_b, const SatCache& sat) {
       if (m.count == 0) return;  // the contacts it has keep their points (their gaps are followed)
       const auto same_pieces = [&](const Contact* c) { return c->piece_a == piece_a && c->piece_b == piece_b; };
       // The new manifold's points, deepest first; those the pieces' contacts hold already go.
@@ -1306,7 +1306,8 @@ void World::refresh_static_contacts(SolveGroup& group, double elapsed, const Sof
       // impact analysis's (rows made again at the pose now held a tripped shard less well: 5 mm
       // deep against 0.3 mm).
       for (Contact* c : found) {
-        if (!same_pieces(c) || next == fresh_count || !(c->constraint.normal.dot(m.normal) > 1 - 1e-9)) continue;
+        // The same normal within about 0.8 degrees (a normal from the moving body's face turns with it).
+        if (!same_pieces(c) || next == fresh_count || !(c->constraint.normal.dot(m.normal) > 1 - 1e-4)) continue;
         ContactConstraint& cc = c->constraint;
         group.batches.pull(&cc);
         const SolverBody& sa = solver_bodies_[cc.body_a];
@@ -1363,6 +1364,7 @@ void World::refresh_static_contacts(SolveGroup& group, double elapsed, const Sof
       c.body_b = slot_b;
       c.piece_a = piece_a;
       c.piece_b = piece_b;
+      c.sat = sat;
       ContactConstraint& cc = c.constraint;
       cc.body_a = slot_a;
       cc.body_b = slot_b;
@@ -1389,23 +1391,28 @@ void World::refresh_static_contacts(SolveGroup& group, double elapsed, const Sof
       for (Index i = 0; i < static_cast<Index>(pieces.size()); ++i) {
         ContactManifold m = collide_hull_plane(pieces[i], pose, fixed.shape->plane, margin, &motion);
         if (static_first) m.normal = -m.normal;  // from the plane (A) to the hull (B)
-        place(m, static_first ? -1 : i, static_first ? i : -1);
+        place(m, static_first ? -1 : i, static_first ? i : -1, {});
       }
     } else {
       // Each piece against the static body's pieces whose boxes its box (grown by the margin) meets.
       const Transform held = transform_of(fixed.rigid);
       const auto& fixed_pieces = fixed.shape->pieces;
+      std::vector<Aabb> fixed_boxes;  // the static pieces' world boxes, once per pair
+      fixed_boxes.reserve(fixed_pieces.size());
+      for (const ConvexHull& piece : fixed_pieces) fixed_boxes.push_back(transform_box(piece.bounds, held));
       for (Index i = 0; i < static_cast<Index>(pieces.size()); ++i) {
         const Aabb box = grow(transform_box(pieces[i].bounds, pose), margin);
         for (Index j = 0; j < static_cast<Index>(fixed_pieces.size()); ++j) {
-          if (!boxes_overlap(box, transform_box(fixed_pieces[j].bounds, held))) continue;
+          if (!boxes_overlap(box, fixed_boxes[j])) continue;
           const Index piece_a = static_first ? j : i, piece_b = static_first ? i : j;
-          SatCache sat;
-          for (const Contact* c : found)
-            if (c->piece_a == piece_a && c->piece_b == piece_b) sat = c->sat;
+          SatCache sat;  // the step's start's, where the pieces had a contact
+          const auto with_cache = std::find_if(found.begin(), found.end(), [&](const Contact* c) {
+            return c->piece_a == piece_a && c->piece_b == piece_b;
+          });
+          if (with_cache != found.end()) sat = (*with_cache)->sat;
           const ContactManifold m = static_first ? collide_hulls(fixed_pieces[j], held, pieces[i], pose, margin, &sat)
                                                  : collide_hulls(pieces[i], pose, fixed_pieces[j], held, margin, &sat);
-          place(m, piece_a, piece_b);
+          place(m, piece_a, piece_b, sat);
         }
       }
     }
