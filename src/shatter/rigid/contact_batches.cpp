@@ -72,8 +72,11 @@ Vec3 get_lane(const Lane3& from, int lane) { return {from.x[lane], from.y[lane],
           Lanes{v0.z(), v1.z(), v2.z(), v3.z()}};
 }
 
-// Lane `lane` of w from constraint c.
-void pack(const ContactConstraint& c, std::span<const SolverBody> bodies, int lane, WideContact& w) {
+const ContactPoint kNoPoint{};  // an empty point slot: no mass, no impulse
+
+// Lane `lane` of w from constraint c: its first `slots` point slots (at least c.count; those past
+// c.count get no mass and no impulse).
+void pack(const ContactConstraint& c, std::span<const SolverBody> bodies, int lane, WideContact& w, int slots) {
   w.body_a[lane] = c.body_a;
   w.body_b[lane] = c.body_b;
   w.a_responds[lane] = c.a_responds ? -1 : 0;
@@ -100,8 +103,8 @@ void pack(const ContactConstraint& c, std::span<const SolverBody> bodies, int la
   w.twist_impulse[lane] = c.twist_impulse;
   set_lane(w.total_friction_impulse, lane, c.total_friction_impulse);
   w.total_twist_impulse[lane] = c.total_twist_impulse;
-  for (int k = 0; k < c.count; ++k) {
-    const ContactPoint& p = c.points[k];
+  for (int k = 0; k < slots; ++k) {
+    const ContactPoint& p = k < c.count ? c.points[k] : kNoPoint;
     WidePoint& q = w.points[k];
     q.adjusted_separation[lane] = p.adjusted_separation;
     set_lane(q.local_anchor_a, lane, p.local_anchor_a);
@@ -410,7 +413,7 @@ void ContactBatches::build(std::span<ContactConstraint* const> constraints, std:
       }
       for (int l = 0; l < kLanes && first + l < list.size(); ++l) {
         sources_[next][l] = list[first + l];
-        pack(*list[first + l], bodies, l, w);
+        pack(*list[first + l], bodies, l, w, list[first + l]->count);
       }
     }
   }
@@ -462,25 +465,9 @@ void ContactBatches::pull(const ContactConstraint* c) {
 void ContactBatches::reload(const ContactConstraint* c, std::span<const SolverBody> bodies) {
   const std::size_t at = lane_of(c);
   if (at == static_cast<std::size_t>(-1)) return;
-  WideContact& w = wide_[at / kLanes];
-  const int l = static_cast<int>(at % kLanes);
-  // The lane's point slots cleared first (no mass, no impulse): it may now have fewer points.
-  for (WidePoint& q : w.points) {
-    q.adjusted_separation[l] = 0;
-    set_lane(q.local_anchor_a, l, Vec3::Zero());
-    set_lane(q.local_anchor_b, l, Vec3::Zero());
-    set_lane(q.rn_a, l, Vec3::Zero());
-    set_lane(q.rn_b, l, Vec3::Zero());
-    set_lane(q.ang_a, l, Vec3::Zero());
-    set_lane(q.ang_b, l, Vec3::Zero());
-    q.normal_mass[l] = 0;
-    q.normal_impulse[l] = 0;
-    q.lever_arm[l] = 0;
-    q.approach_speed[l] = 0;
-    q.max_normal_impulse[l] = 0;
-    q.total_normal_impulse[l] = 0;
-  }
-  pack(*c, bodies, l, w);
+  // Every point slot written: the lane may now have fewer points than it had.
+  pack(*c, bodies, static_cast<int>(at % kLanes), wide_[at / kLanes],
+       static_cast<int>(std::tuple_size_v<decltype(WideContact::points)>));
 }
 
 void ContactBatches::store() const {

@@ -81,6 +81,13 @@ double relative_motion(const ContactOrigin& o, const Vec3& offset, const Quat& r
 
 bool key_less(const Contact& x, const Contact& y) { return contact_key(x) < contact_key(y); }
 
+// A pair's coefficients from its two surfaces: friction their geometric mean, restitution the
+// larger (Box2D's mixing).
+double mixed_friction(const SurfaceMaterial& a, const SurfaceMaterial& b) { return std::sqrt(a.friction * b.friction); }
+double mixed_restitution(const SurfaceMaterial& a, const SurfaceMaterial& b) {
+  return std::max(a.restitution, b.restitution);
+}
+
 // Warm start of a manifold's friction and twist from the same manifold's last step `old`: its
 // impulses re-expressed in cc's tangents (set before) and about cc's normal.
 struct CarriedFriction {
@@ -1115,8 +1122,8 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
     ContactConstraint& cc = *c;
     const Body& a = bodies_[cc.body_a];
     const Body& b = bodies_[cc.body_b];
-    cc.friction = std::sqrt(a.surface.friction * b.surface.friction);
-    cc.restitution = std::max(a.surface.restitution, b.surface.restitution);
+    cc.friction = mixed_friction(a.surface, b.surface);
+    cc.restitution = mixed_restitution(a.surface, b.surface);
     cc.softness = (a.type == BodyType::dynamic && b.type == BodyType::dynamic) ? soft : static_soft;
     prepare_contact(cc, solver_bodies_, settings_.speculative_distance);
   }
@@ -1369,8 +1376,8 @@ void World::refresh_static_contacts(SolveGroup& group, double elapsed, const Sof
       cc.body_a = slot_a;
       cc.body_b = slot_b;
       cc.normal = m.normal;
-      cc.friction = std::sqrt(bodies_[slot_a].surface.friction * bodies_[slot_b].surface.friction);
-      cc.restitution = std::max(bodies_[slot_a].surface.restitution, bodies_[slot_b].surface.restitution);
+      cc.friction = mixed_friction(bodies_[slot_a].surface, bodies_[slot_b].surface);
+      cc.restitution = mixed_restitution(bodies_[slot_a].surface, bodies_[slot_b].surface);
       cc.softness = soft;
       for (; next < fresh_count; ++next)
         cc.points[cc.count++] = {
@@ -2003,7 +2010,7 @@ DynamicObstacles World::deformable_obstacles(Index slot) const {
     if (o == slot || other.removed || other.type == BodyType::dynamic) continue;
     if (!(b.filter.group & other.filter.mask) || !(other.filter.group & b.filter.mask) || pair_excluded(slot, o))
       continue;
-    const double mu = std::sqrt(b.surface.friction * other.surface.friction);
+    const double mu = mixed_friction(b.surface, other.surface);
     if (other.shape->is_plane) {
       out.planes.push_back({.normal = other.shape->plane.normal, .offset = other.shape->plane.offset, .friction = mu});
       continue;
