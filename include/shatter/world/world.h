@@ -629,10 +629,13 @@ class World {
     /// order of contacts_.
     std::vector<std::pair<ContactConstraint*, bool>> shock;
     std::vector<std::pair<ContactConstraint*, bool>> shock_support;
-    /// The contacts between a static body (a plane, convex pieces) and a piece of a rigid body,
-    /// in the order of contacts_: found again within the step when the body turns far
-    /// (refresh_static_contacts).
-    std::vector<Contact*> static_contacts;
+    /// The contacts between a piece of a rigid dynamic body and a plane or a piece of another
+    /// rigid body (static, kinematic or dynamic), in the order of contacts_: found again within
+    /// the step when one of the pair's moving bodies turns far (refresh_contacts).
+    std::vector<Contact*> refreshable;
+    /// Per refreshable contact that is its pair's first, with both bodies moving: their World::turn_
+    /// when the pair's contacts were last found (zero: at the step's start).
+    std::vector<std::array<Vec3, 2>> turn_base;
     /// Contacts made within the step for points that found no place in the step's; a deque, so
     /// that the solver's pointers to them hold. Merged into contacts_ after the solve.
     std::deque<Contact> made;
@@ -647,12 +650,16 @@ class World {
   static bool moves_in_solve(const Body& b) { return b.awake && b.type != BodyType::static_body; }
   void build_solve_groups(std::span<Contact* const> active, std::span<const Index> moving);
   void solve_group(SolveGroup& group, double h, double inverse_h);
-  /// Within a group's step, after `elapsed` seconds of it: the contacts with static bodies of each
-  /// body that has turned far since they were found, found again at its pose now (docs/method.md,
-  /// "No tunnelling"). `soft`: the softness of contacts with static bodies.
-  void refresh_static_contacts(SolveGroup& group, double elapsed, const Softness& soft);
-  /// Per body: the angle it turned (rad) since its static contacts were found in this step.
+  /// Within a group's step, after `elapsed` seconds of it: the refreshable contacts of each pair
+  /// with a moving body that has turned far since they were found, found again at the poses now
+  /// (docs/method.md, "No tunnelling"). `soft`: the softness of contacts between two dynamic
+  /// bodies; `static_soft`: of the others.
+  void refresh_contacts(SolveGroup& group, double elapsed, const Softness& soft, const Softness& static_soft);
+  /// Per moving body: the angle it turned (rad, the sum of |ω| h) since its contacts with bodies
+  /// that do not move were found in this step.
   std::vector<double> turned_;
+  /// Per moving body: the sum of ω h over this step's substeps so far (rad, world).
+  std::vector<Vec3> turn_;
   std::vector<Index> island_parent_;
   std::vector<Index> island_of_;
 };

@@ -1012,6 +1012,7 @@ void World::solve() {
   stats_.contacts = static_cast<std::int64_t>(active.size());
 
   turned_.resize(n);
+  turn_.resize(n);
   build_solve_groups(active, moving);
   const auto groups = static_cast<std::int64_t>(solve_group_count_);
   stats_.solve_groups = groups;
@@ -1067,7 +1068,7 @@ void World::build_solve_groups(std::span<Contact* const> active, std::span<const
     if (solve_groups_.size() <= count) solve_groups_.emplace_back();
     solve_groups_[count].moving.clear();
     solve_groups_[count].constraints.clear();
-    solve_groups_[count].static_contacts.clear();
+    solve_groups_[count].refreshable.clear();
     solve_groups_[count].made.clear();
     ++count;
     filled = 0;
@@ -1087,15 +1088,15 @@ void World::build_solve_groups(std::span<Contact* const> active, std::span<const
     const Index body = moves(c->body_a) ? c->body_a : c->body_b;
     SolveGroup& group = solve_groups_[group_of_root[find_root(solve_parent_, body)]];
     group.constraints.push_back(&c->constraint);
-    // A static body (a plane or convex pieces) and a piece of a rigid dynamic body (not the tet
-    // mode's points: no piece).
-    const Body& b = bodies_[body];
-    const Body& other = bodies_[c->body_a == body ? c->body_b : c->body_a];
-    const Index other_piece = c->body_a == body ? c->piece_b : c->piece_a;
-    const Index piece = c->body_a == body ? c->piece_a : c->piece_b;
-    if (b.type == BodyType::dynamic && !b.deform && piece >= 0 && other.type == BodyType::static_body &&
-        (other.is_plane || other_piece >= 0))
-      group.static_contacts.push_back(c);
+    // A piece of a rigid dynamic body (not the tet mode's points: no piece) and a plane or a piece
+    // of another rigid body.
+    const auto rigid_piece = [&](Index slot, Index piece) { return piece >= 0 && !bodies_[slot].deform; };
+    const auto dynamic_piece = [&](Index slot, Index piece) {
+      return bodies_[slot].type == BodyType::dynamic && rigid_piece(slot, piece);
+    };
+    if ((dynamic_piece(c->body_a, c->piece_a) && (bodies_[c->body_b].is_plane || rigid_piece(c->body_b, c->piece_b))) ||
+        (dynamic_piece(c->body_b, c->piece_b) && (bodies_[c->body_a].is_plane || rigid_piece(c->body_a, c->piece_a))))
+      group.refreshable.push_back(c);
   }
 }
 
@@ -1112,7 +1113,9 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
     s.position = b.rigid.position;
     s.rotation = b.rigid.orientation.toRotationMatrix();
     turned_[i] = 0;
+    turn_[i].setZero();
   }
+  group.turn_base.assign(group.refreshable.size(), {Vec3::Zero(), Vec3::Zero()});
   // Box3D's choices: the spring at most an eighth of the substep rate; contacts with static and
   // kinematic bodies twice as stiff and half as damped, so nothing is pushed into the ground.
   const double hertz = std::min(settings_.contact.contact_hertz, 0.125 / h);
@@ -1191,7 +1194,7 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
   const auto num_moving = static_cast<std::int64_t>(moving.size());
 
   for (int sub = 0; sub < settings_.substeps; ++sub) {
-    if (sub > 0 && !group.static_contacts.empty()) refresh_static_contacts(group, sub * h, static_soft);
+    if (sub > 0 && !group.refreshable.empty()) refresh_contacts(group, sub * h, soft, static_soft);
     parallel_for(
         0, num_moving,
         [&](std::int64_t k) {
@@ -1237,6 +1240,7 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
             s.angular_velocity = b.rigid.angular_velocity;
             s.position = b.rigid.position;
             turned_[moving[first + k]] += h * s.angular_velocity.norm();
+            turn_[moving[first + k]] += h * s.angular_velocity;
           }
         },
         (settings_.parallel_min_bodies + 3) / 4);  // groups: the same threshold in bodies
@@ -1254,36 +1258,53 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
   }
 }
 
-void World::refresh_static_contacts(SolveGroup& group, double elapsed, const Softness& soft) {
-  // A body's contacts with the static world were found at the step's start, from its pose then,
-  // and the solver holds their points with rows fixed at that pose. A body turned far within the
-  // step (a blow, a landing that trips it) has other vertices come down, where no point is: a
-  // piece spun to the rotation limit went wholly under the ground in one step. Found again when
-  // the turn has moved a vertex farther than its rows foresee: r (1 - cos θ) ~ r θ² / 2 past a
-  // quarter of the speculative distance (the depth at which collide_hull_plane adds a vertex the
-  // motion brings).
+void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& soft, const Softness& static_soft) {
+  // A pair's contacts were found at the step's start, from the poses then, and the solver holds
+  // their points with rows fixed at those poses. A body turned far within the step (a blow, a
+  // landing that trips it) has other vertices come down, where no point is: a piece spun to the
+  // rotation limit went wholly under the ground in one step, and 34 mm into a resting block.
+  // Found again when the turn has moved a vertex farther than its rows foresee: r (1 - cos θ) ~
+  // r θ² / 2 past a quarter of the speculative distance (the depth at which collide_hull_plane
+  // adds a vertex the motion brings). Against a body that does not move θ is the angle the body
+  // turned (the sum of |ω| h); between two moving bodies, the angle one turned against the other
+  // (the difference of their sums of ω h, since the pair was last found): pieces tumbling
+  // together keep their contacts.
   const double spec = settings_.speculative_distance;
   const double left = settings_.time_step - elapsed;
-  const std::vector<Contact*>& list = group.static_contacts;
+  const std::vector<Contact*>& list = group.refreshable;
   std::vector<Index> refreshed;
   std::vector<Contact*> found;  // the pair's contacts: from the step's start, then those made since
+  const auto far = [&](double turn, double radius) { return 0.5 * turn * turn * radius > 0.25 * spec; };
   for (std::size_t first = 0, last = 0; first < list.size(); first = last) {
     const Index slot_a = list[first]->body_a, slot_b = list[first]->body_b;
     for (last = first + 1; last < list.size() && list[last]->body_a == slot_a && list[last]->body_b == slot_b;) ++last;
-    const bool static_first = bodies_[slot_a].type == BodyType::static_body;
-    const Index slot = static_first ? slot_b : slot_a;
+    // The pieces of the moving dynamic body (A, when both are) are collided with the other's plane
+    // or pieces; each point's position lies on the other's surface.
+    const bool other_first = bodies_[slot_a].type != BodyType::dynamic || !moves_in_solve(bodies_[slot_a]);
+    const Index slot = other_first ? slot_b : slot_a;
+    const Index other_slot = other_first ? slot_a : slot_b;
     const Body& b = bodies_[slot];
-    const Body& fixed = bodies_[static_first ? slot_a : slot_b];
-    const double turn = turned_[slot];
-    if (!(0.5 * turn * turn * b.radius > 0.25 * spec)) continue;
-    refreshed.push_back(slot);
+    const Body& other = bodies_[other_slot];
+    if (!moves_in_solve(other)) {
+      if (!far(turned_[slot], b.radius)) continue;
+      refreshed.push_back(slot);
+    } else {
+      std::array<Vec3, 2>& since = group.turn_base[first];
+      const Vec3 turn = (turn_[slot_a] - since[0]) - (turn_[slot_b] - since[1]);
+      if (!far(turn.norm(), std::max(b.radius, other.radius))) continue;
+      since = {turn_[slot_a], turn_[slot_b]};
+    }
     found.assign(list.begin() + static_cast<std::ptrdiff_t>(first), list.begin() + static_cast<std::ptrdiff_t>(last));
     for (Contact& c : group.made)
       if (c.body_a == slot_a && c.body_b == slot_b) found.push_back(&c);
     const SolverBody& s = solver_bodies_[slot];
+    const SolverBody& so = solver_bodies_[other_slot];
     const Transform pose{s.rotation, s.position};
-    // Gaps the rest of the step can close, as the narrow phase's margin.
-    const double margin = spec + left * (s.linear_velocity.norm() + s.angular_velocity.norm() * b.radius);
+    // Gaps the rest of the step can close, as the narrow phase's margin (the other body's motion
+    // is zero when it does not move).
+    const double margin = spec + left * (s.linear_velocity.norm() + s.angular_velocity.norm() * b.radius) +
+                          left * (so.linear_velocity.norm() + so.angular_velocity.norm() * other.radius);
+    const Softness& pair_soft = b.type == BodyType::dynamic && other.type == BodyType::dynamic ? soft : static_soft;
     bool changed = false;
     // The manifold `m` (its normal from A to B) of the pieces `piece_a`, `piece_b` at the pose now,
     // merged into the pair's contacts.
@@ -1319,8 +1340,8 @@ void World::refresh_static_contacts(SolveGroup& group, double elapsed, const Sof
         group.batches.pull(&cc);
         const SolverBody& sa = solver_bodies_[cc.body_a];
         const SolverBody& sb = solver_bodies_[cc.body_b];
-        // Each point now: the moving body's surface point, the static one's its projection (the
-        // body slides on it).
+        // Each point now: the dynamic body's surface point, the other's its projection (the body
+        // slides on it).
         ContactConstraint now = cc;
         for (int k = 0; k < now.count; ++k) {
           ContactPoint& p = now.points[k];
@@ -1328,7 +1349,7 @@ void World::refresh_static_contacts(SolveGroup& group, double elapsed, const Sof
           const Vec3 on_b = sb.position + sb.rotation * p.local_anchor_b;
           p.separation = p.adjusted_separation + cc.normal.dot(on_b - on_a);
           p.position =
-              static_first ? Vec3(on_b - 0.5 * p.separation * cc.normal) : Vec3(on_a + 0.5 * p.separation * cc.normal);
+              other_first ? Vec3(on_b - 0.5 * p.separation * cc.normal) : Vec3(on_a + 0.5 * p.separation * cc.normal);
         }
         std::array<bool, 4> joined{};
         for (; next < fresh_count; ++next) {
@@ -1350,16 +1371,16 @@ void World::refresh_static_contacts(SolveGroup& group, double elapsed, const Sof
           joined[at] = true;
         }
         if (std::none_of(joined.begin(), joined.end(), [](bool j) { return j; })) continue;
-        // The joining points' rows from the constraint prepared at the pose now; the other points,
+        // The joining points' rows from the constraint prepared at the poses now; the other points,
         // the friction centre and the friction rows stay (the twist's lever arms from the centre on
-        // the static body, which does not move).
+        // the other body, which does not turn, or turns less than the body that tripped the refresh).
         prepare_contact(now, solver_bodies_, spec);
         cc.count = now.count;
         for (int k = 0; k < cc.count; ++k) {
           if (!joined[k]) continue;
           cc.points[k] = now.points[k];
-          cc.points[k].lever_arm = static_first ? (cc.points[k].anchor_a - cc.centre_a).norm()
-                                                : (cc.points[k].anchor_b - cc.centre_b).norm();
+          cc.points[k].lever_arm =
+              other_first ? (cc.points[k].anchor_a - cc.centre_a).norm() : (cc.points[k].anchor_b - cc.centre_b).norm();
         }
         group.batches.reload(&cc, solver_bodies_);
         changed = true;
@@ -1378,7 +1399,7 @@ void World::refresh_static_contacts(SolveGroup& group, double elapsed, const Sof
       cc.normal = m.normal;
       cc.friction = mixed_friction(bodies_[slot_a].surface, bodies_[slot_b].surface);
       cc.restitution = mixed_restitution(bodies_[slot_a].surface, bodies_[slot_b].surface);
-      cc.softness = soft;
+      cc.softness = pair_soft;
       for (; next < fresh_count; ++next)
         cc.points[cc.count++] = {
             .position = fresh[next].point, .separation = fresh[next].separation, .feature = fresh[next].feature};
@@ -1388,7 +1409,7 @@ void World::refresh_static_contacts(SolveGroup& group, double elapsed, const Sof
       changed = true;
     };
     const auto& pieces = b.shape->pieces;
-    if (fixed.is_plane) {
+    if (other.is_plane) {
       const HullMotion motion{.linear_velocity = s.linear_velocity,
                               .angular_velocity = s.angular_velocity,
                               .dt = left,
@@ -1396,29 +1417,31 @@ void World::refresh_static_contacts(SolveGroup& group, double elapsed, const Sof
                               .inverse_mass = b.inertia.inverse_mass,
                               .inverse_inertia = b.inertia.inverse_inertia_body};
       for (Index i = 0; i < static_cast<Index>(pieces.size()); ++i) {
-        ContactManifold m = collide_hull_plane(pieces[i], pose, fixed.shape->plane, margin, &motion);
-        if (static_first) m.normal = -m.normal;  // from the plane (A) to the hull (B)
-        place(m, static_first ? -1 : i, static_first ? i : -1, {});
+        ContactManifold m = collide_hull_plane(pieces[i], pose, other.shape->plane, margin, &motion);
+        if (other_first) m.normal = -m.normal;  // from the plane (A) to the hull (B)
+        place(m, other_first ? -1 : i, other_first ? i : -1, {});
       }
     } else {
-      // Each piece against the static body's pieces whose boxes its box (grown by the margin) meets.
-      const Transform held = transform_of(fixed.rigid);
-      const auto& fixed_pieces = fixed.shape->pieces;
-      std::vector<Aabb> fixed_boxes;  // the static pieces' world boxes, once per pair
-      fixed_boxes.reserve(fixed_pieces.size());
-      for (const ConvexHull& piece : fixed_pieces) fixed_boxes.push_back(transform_box(piece.bounds, held));
+      // Each piece against the other body's pieces whose boxes its box (grown by the margin) meets,
+      // at its pose now (a static body's: as it rests).
+      const Transform held =
+          other.type == BodyType::static_body ? transform_of(other.rigid) : Transform{so.rotation, so.position};
+      const auto& other_pieces = other.shape->pieces;
+      std::vector<Aabb> other_boxes;  // the other's pieces' world boxes, once per pair
+      other_boxes.reserve(other_pieces.size());
+      for (const ConvexHull& piece : other_pieces) other_boxes.push_back(transform_box(piece.bounds, held));
       for (Index i = 0; i < static_cast<Index>(pieces.size()); ++i) {
         const Aabb box = grow(transform_box(pieces[i].bounds, pose), margin);
-        for (Index j = 0; j < static_cast<Index>(fixed_pieces.size()); ++j) {
-          if (!boxes_overlap(box, fixed_boxes[j])) continue;
-          const Index piece_a = static_first ? j : i, piece_b = static_first ? i : j;
+        for (Index j = 0; j < static_cast<Index>(other_pieces.size()); ++j) {
+          if (!boxes_overlap(box, other_boxes[j])) continue;
+          const Index piece_a = other_first ? j : i, piece_b = other_first ? i : j;
           SatCache sat;  // the step's start's, where the pieces had a contact
           const auto with_cache = std::find_if(found.begin(), found.end(), [&](const Contact* c) {
             return c->piece_a == piece_a && c->piece_b == piece_b;
           });
           if (with_cache != found.end()) sat = (*with_cache)->sat;
-          const ContactManifold m = static_first ? collide_hulls(fixed_pieces[j], held, pieces[i], pose, margin, &sat)
-                                                 : collide_hulls(pieces[i], pose, fixed_pieces[j], held, margin, &sat);
+          const ContactManifold m = other_first ? collide_hulls(other_pieces[j], held, pieces[i], pose, margin, &sat)
+                                                : collide_hulls(pieces[i], pose, other_pieces[j], held, margin, &sat);
           place(m, piece_a, piece_b, sat);
         }
       }
