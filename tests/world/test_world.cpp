@@ -950,5 +950,45 @@ TEST(World, APieceTrippedByALandingStaysOnTheGround) {
   }
 }
 
+// A bar spinning at up to 90 rad/s thrown at 8-10 m/s at a free block (no gravity), resting or
+// turning: its vertices that the spin brings down within the step are held too (the pair's
+// contacts found again), and no collision adds kinetic energy.
+TEST(World, ASpinningPieceThrownAtAFreeBlockStaysOutOfIt) {
+  const auto bar = scenes::box_model(Vec3(0.04, 0.01, 0.015));
+  const auto block = scenes::box_model(Vec3(0.1, 0.1, 0.1));
+  double deepest = 0;
+  for (int k = 0; k < 200; ++k) {
+    WorldSettings settings = scenes::settings(false);
+    settings.gravity = Vec3::Zero();
+    World w(settings);
+    BodyDef a;
+    a.breakable = false;
+    a.rigid.orientation = Quat(Eigen::AngleAxisd(0.37 * k, Vec3(1, 2, 3).normalized()));
+    a.rigid.position = Vec3(-0.16, 0.02 * std::sin(1.3 * k), 0.02 * std::cos(0.7 * k));
+    a.rigid.linear_velocity = Vec3(8 + 0.05 * (k % 40), 0, 0);
+    a.rigid.angular_velocity =
+        (20 + 0.35 * k) * Vec3(std::sin(0.9 * k), std::cos(1.1 * k), std::sin(0.3 * k + 1)).normalized();
+    BodyDef b;
+    b.breakable = false;
+    if (k % 2 == 1) b.rigid.angular_velocity = Vec3(0, 0, 10);
+    const BodyId thrown = *w.add_body(bar, a);
+    const BodyId hit = *w.add_body(block, b);
+    const double energy = w.kinetic_energy();
+    for (int i = 0; i < 20; ++i) {
+      w.step();
+      ASSERT_LE(w.kinetic_energy(), energy * (1 + 1e-12)) << "throw " << k << ", step " << i;
+      const RigidState& r = w.rigid_state(hit);
+      for (const Vec3& x : world_positions(*w.model(thrown), w.rigid_state(thrown))) {
+        const Vec3 local = r.orientation.conjugate() * (x - r.position);
+        deepest = std::max(deepest, 0.1 - local.cwiseAbs().maxCoeff());
+      }
+    }
+  }
+  // With only the contacts found at each step's start: 27 mm (14 throws past 8 mm); now 9 mm
+  // (3 throws), most of it the give of a contact between two dynamic bodies (6.5 mm with the
+  // stiffness of a contact with a static body).
+  EXPECT_LT(deepest, 0.012);
+}
+
 }  // namespace
 }  // namespace shatter
