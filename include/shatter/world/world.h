@@ -633,9 +633,9 @@ class World {
     /// rigid body (static, kinematic or dynamic), in the order of contacts_: found again within
     /// the step when one of the pair's moving bodies turns far (refresh_contacts).
     std::vector<Contact*> refreshable;
-    /// Per refreshable contact that is its pair's first, with both bodies moving: their World::turn_
+    /// Per refreshable contact that is its pair's first, with both bodies moving: their World::spun_
     /// when the pair's contacts were last found (zero: at the step's start).
-    std::vector<std::array<Vec3, 2>> turn_base;
+    std::vector<std::array<double, 2>> turn_base;
     /// Contacts made within the step for points that found no place in the step's; a deque, so
     /// that the solver's pointers to them hold. Merged into contacts_ after the solve.
     std::deque<Contact> made;
@@ -658,8 +658,11 @@ class World {
   /// Per moving body: the angle it turned (rad, the sum of |ω| h) since its contacts with bodies
   /// that do not move were found in this step.
   std::vector<double> turned_;
-  /// Per moving body: the sum of ω h over this step's substeps so far (rad, world).
-  std::vector<Vec3> turn_;
+  /// Per moving body: the angle it turned in this step so far (rad, the sum of |ω| h).
+  std::vector<double> spun_;
+  /// Scratch of World::solve: the contacts made within the step, and contacts_ merged with them.
+  std::vector<Contact> made_buffer_;
+  std::vector<Contact> merge_buffer_;
   std::vector<Index> island_parent_;
   std::vector<Index> island_of_;
 };

@@ -1012,7 +1012,7 @@ void World::solve() {
   stats_.contacts = static_cast<std::int64_t>(active.size());
 
   turned_.resize(n);
-  turn_.resize(n);
+  spun_.resize(n);
   build_solve_groups(active, moving);
   const auto groups = static_cast<std::int64_t>(solve_group_count_);
   stats_.solve_groups = groups;
@@ -1029,8 +1029,10 @@ void World::solve() {
     for (std::int64_t g = 0; g < groups; ++g) solve_group(solve_groups_[g], h, inverse_h);  // loops inside in parallel
 
   // The contacts made within the step join the others, in key order (the pointers into contacts_
-  // are not used after the solve).
-  std::vector<Contact> made;
+  // are not used after the solve). Through buffers kept from step to step: a step that makes
+  // contacts would otherwise allocate and fault in a copy of every contact (two kilobytes each).
+  std::vector<Contact>& made = made_buffer_;
+  made.clear();
   for (std::int64_t g = 0; g < groups; ++g) {
     for (Contact& c : solve_groups_[g].made) made.push_back(std::move(c));
     solve_groups_[g].made.clear();
@@ -1043,7 +1045,8 @@ void World::solve() {
     // (Insertion: few, and stable.)
     for (auto it = made.begin(); it != made.end(); ++it)
       std::rotate(std::upper_bound(made.begin(), it, *it, key_less), it, std::next(it));
-    std::vector<Contact> merged;
+    std::vector<Contact>& merged = merge_buffer_;
+    merged.clear();
     merged.reserve(contacts_.size() + made.size());
     std::merge(std::make_move_iterator(contacts_.begin()), std::make_move_iterator(contacts_.end()),
                std::make_move_iterator(made.begin()), std::make_move_iterator(made.end()), std::back_inserter(merged),
@@ -1113,9 +1116,9 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
     s.position = b.rigid.position;
     s.rotation = b.rigid.orientation.toRotationMatrix();
     turned_[i] = 0;
-    turn_[i].setZero();
+    spun_[i] = 0;
   }
-  group.turn_base.assign(group.refreshable.size(), {Vec3::Zero(), Vec3::Zero()});
+  group.turn_base.assign(group.refreshable.size(), {0.0, 0.0});
   // Box3D's choices: the spring at most an eighth of the substep rate; contacts with static and
   // kinematic bodies twice as stiff and half as damped, so nothing is pushed into the ground.
   const double hertz = std::min(settings_.contact.contact_hertz, 0.125 / h);
@@ -1240,7 +1243,7 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
             s.angular_velocity = b.rigid.angular_velocity;
             s.position = b.rigid.position;
             turned_[moving[first + k]] += h * s.angular_velocity.norm();
-            turn_[moving[first + k]] += h * s.angular_velocity;
+            spun_[moving[first + k]] += h * s.angular_velocity.norm();
           }
         },
         (settings_.parallel_min_bodies + 3) / 4);  // groups: the same threshold in bodies
@@ -1265,10 +1268,10 @@ void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& 
   // rotation limit went wholly under the ground in one step, and 34 mm into a resting block.
   // Found again when the turn has moved a vertex farther than its rows foresee: r (1 - cos θ) ~
   // r θ² / 2 past a quarter of the speculative distance (the depth at which collide_hull_plane
-  // adds a vertex the motion brings). Against a body that does not move θ is the angle the body
-  // turned (the sum of |ω| h); between two moving bodies, the angle one turned against the other
-  // (the difference of their sums of ω h, since the pair was last found): pieces tumbling
-  // together keep their contacts.
+  // adds a vertex the motion brings), θ the angle the body turned since they were found (the sum
+  // of |ω| h). Between two moving bodies, either's: the rows' normal and lever arms are fixed in
+  // the world, and a piece sliding along a turning face (a paddle sweeping it along) comes into
+  // the face along a normal that turned away (and a piece riding it turns with it).
   const double spec = settings_.speculative_distance;
   const double left = settings_.time_step - elapsed;
   const std::vector<Contact*>& list = group.refreshable;
@@ -1289,10 +1292,11 @@ void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& 
       if (!far(turned_[slot], b.radius)) continue;
       refreshed.push_back(slot);
     } else {
-      std::array<Vec3, 2>& since = group.turn_base[first];
-      const Vec3 turn = (turn_[slot_a] - since[0]) - (turn_[slot_b] - since[1]);
-      if (!far(turn.norm(), std::max(b.radius, other.radius))) continue;
-      since = {turn_[slot_a], turn_[slot_b]};
+      std::array<double, 2>& since = group.turn_base[first];
+      if (!far(spun_[slot_a] - since[0], bodies_[slot_a].radius) &&
+          !far(spun_[slot_b] - since[1], bodies_[slot_b].radius))
+        continue;
+      since = {spun_[slot_a], spun_[slot_b]};
     }
     found.assign(list.begin() + static_cast<std::ptrdiff_t>(first), list.begin() + static_cast<std::ptrdiff_t>(last));
     for (Contact& c : group.made)
@@ -1305,12 +1309,70 @@ void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& 
     const double margin = spec + left * (s.linear_velocity.norm() + s.angular_velocity.norm() * b.radius) +
                           left * (so.linear_velocity.norm() + so.angular_velocity.norm() * other.radius);
     const Softness& pair_soft = b.type == BodyType::dynamic && other.type == BodyType::dynamic ? soft : static_soft;
+    const bool moving_other = moves_in_solve(other);
     bool changed = false;
     // The manifold `m` (its normal from A to B) of the pieces `piece_a`, `piece_b` at the pose now,
     // merged into the pair's contacts.
     const auto place = [&](const ContactManifold& m, Index piece_a, Index piece_b, const SatCache& sat) {
       if (m.count == 0) return;  // the contacts it has keep their points (their gaps are followed)
       const auto same_pieces = [&](const Contact* c) { return c->piece_a == piece_a && c->piece_b == piece_b; };
+      // Against a moving body, a contact whose normal has turned (the face it came from turned
+      // with its body: a kinematic paddle sweeping a piece along) is aimed along the normal now,
+      // its points those of the manifold: its normal fixed at the step's start pushed the piece
+      // along a direction the face had left, and the face ran into it. A point the contact held
+      // keeps its impulses, totals and approach speed (by feature).
+      if (moving_other)
+        for (Contact* c : found) {
+          ContactConstraint& cc = c->constraint;
+          if (!same_pieces(c) || cc.normal.dot(m.normal) > 1 - 1e-4) continue;
+          const auto old_point = [&](std::uint32_t feature) {
+            for (int j = 0; j < cc.count; ++j)
+              if (cc.points[j].feature == feature) return j;
+            return -1;
+          };
+          if (std::none_of(m.points.begin(), m.points.begin() + m.count,
+                           [&](const ManifoldPoint& q) { return old_point(q.feature) >= 0; }))
+            continue;
+          group.batches.pull(&cc);
+          ContactConstraint now = cc;
+          now.normal = m.normal;
+          now.count = m.count;
+          for (int k = 0; k < m.count; ++k)
+            now.points[k] = {
+                .position = m.points[k].point, .separation = m.points[k].separation, .feature = m.points[k].feature};
+          prepare_contact(now, solver_bodies_, spec);
+          for (int k = 0; k < now.count; ++k) {
+            const int j = old_point(now.points[k].feature);
+            if (j < 0) continue;
+            ContactPoint& p = now.points[k];
+            const ContactPoint& was = cc.points[j];
+            p.normal_impulse = was.normal_impulse;
+            p.total_normal_impulse = was.total_normal_impulse;
+            p.max_normal_impulse = was.max_normal_impulse;
+            p.approach_speed = std::max(p.approach_speed, was.approach_speed);
+          }
+          // A point the manifold no longer has hands what it carried to the nearest of the new.
+          for (int j = 0; j < cc.count; ++j) {
+            const ContactPoint& was = cc.points[j];
+            if (std::any_of(now.points.begin(), now.points.begin() + now.count,
+                            [&](const ContactPoint& p) { return p.feature == was.feature; }))
+              continue;
+            int near = 0;
+            for (int k = 1; k < now.count; ++k)
+              if ((now.points[k].position - was.position).squaredNorm() <
+                  (now.points[near].position - was.position).squaredNorm())
+                near = k;
+            now.points[near].total_normal_impulse += was.total_normal_impulse;
+            now.points[near].max_normal_impulse = std::max(now.points[near].max_normal_impulse, was.max_normal_impulse);
+          }
+          now.friction_impulse = cc.friction_impulse;
+          now.twist_impulse = cc.twist_impulse;
+          now.total_friction_impulse = cc.total_friction_impulse;
+          now.total_twist_impulse = cc.total_twist_impulse;
+          cc = now;
+          group.batches.reload(&cc, solver_bodies_);
+          changed = true;
+        }
       // The new manifold's points, deepest first; those the pieces' contacts hold already go.
       std::array<ManifoldPoint, 4> fresh{};
       int fresh_count = 0;
