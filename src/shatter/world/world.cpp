@@ -1318,9 +1318,15 @@ void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& 
       const auto same_pieces = [&](const Contact* c) { return c->piece_a == piece_a && c->piece_b == piece_b; };
       // Against a moving body, a contact whose normal has turned (the face it came from turned
       // with its body: a kinematic paddle sweeping a piece along) is aimed along the normal now,
-      // its points those of the manifold: its normal fixed at the step's start pushed the piece
-      // along a direction the face had left, and the face ran into it. A point the contact held
-      // keeps its impulses, totals and approach speed (by feature).
+      // its points those of the manifold that no other contact of the pieces holds: its normal
+      // fixed at the step's start pushed the piece along a direction the face had left, and the
+      // face ran into it. A point the contact held keeps its impulses, totals and approach speed
+      // (by feature).
+      const auto held_by = [&](const Contact* c, std::uint32_t feature) {
+        const ContactConstraint& cc = c->constraint;
+        return std::any_of(cc.points.begin(), cc.points.begin() + cc.count,
+                           [&](const ContactPoint& p) { return p.feature == feature; });
+      };
       if (moving_other)
         for (Contact* c : found) {
           ContactConstraint& cc = c->constraint;
@@ -1336,10 +1342,15 @@ void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& 
           group.batches.pull(&cc);
           ContactConstraint now = cc;
           now.normal = m.normal;
-          now.count = m.count;
-          for (int k = 0; k < m.count; ++k)
-            now.points[k] = {
-                .position = m.points[k].point, .separation = m.points[k].separation, .feature = m.points[k].feature};
+          now.count = 0;
+          for (int k = 0; k < m.count; ++k) {
+            const ManifoldPoint& q = m.points[k];
+            if (std::any_of(found.begin(), found.end(),
+                            [&](const Contact* o) { return o != c && same_pieces(o) && held_by(o, q.feature); }))
+              continue;
+            now.points[now.count++] = {.position = q.point, .separation = q.separation, .feature = q.feature};
+          }
+          if (now.count == 0) continue;
           prepare_contact(now, solver_bodies_, spec);
           for (int k = 0; k < now.count; ++k) {
             const int j = old_point(now.points[k].feature);
@@ -1378,11 +1389,8 @@ void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& 
       int fresh_count = 0;
       for (int k = 0; k < m.count; ++k) {
         const ManifoldPoint& q = m.points[k];
-        const bool held = std::any_of(found.begin(), found.end(), [&](const Contact* c) {
-          return same_pieces(c) &&
-                 std::any_of(c->constraint.points.begin(), c->constraint.points.begin() + c->constraint.count,
-                             [&](const ContactPoint& p) { return p.feature == q.feature; });
-        });
+        const bool held = std::any_of(found.begin(), found.end(),
+                                      [&](const Contact* c) { return same_pieces(c) && held_by(c, q.feature); });
         if (held) continue;
         int at = fresh_count++;
         for (; at > 0 && q.separation < fresh[at - 1].separation; --at) fresh[at] = fresh[at - 1];
