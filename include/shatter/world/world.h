@@ -633,8 +633,8 @@ class World {
     /// rigid body (static, kinematic or dynamic), in the order of contacts_: found again within
     /// the step when one of the pair's moving bodies turns far (refresh_contacts).
     std::vector<Contact*> refreshable;
-    /// Per refreshable contact that is its pair's first, with both bodies moving: their World::spun_
-    /// when the pair's contacts were last found (zero: at the step's start).
+    /// Per refreshable contact that is its pair's first: its two bodies' World::spun_ when the
+    /// pair's contacts were last found (zero: at the step's start).
     std::vector<std::array<double, 2>> turn_base;
     /// Contacts made within the step for points that found no place in the step's; a deque, so
     /// that the solver's pointers to them hold. Merged into contacts_ after the solve.
@@ -655,9 +655,6 @@ class World {
   /// (docs/method.md, "No tunnelling"). `soft`: the softness of contacts between two dynamic
   /// bodies; `static_soft`: of the others.
   void refresh_contacts(SolveGroup& group, double elapsed, const Softness& soft, const Softness& static_soft);
-  /// Per moving body: the angle it turned (rad, the sum of |ω| h) since its contacts with bodies
-  /// that do not move were found in this step.
-  std::vector<double> turned_;
   /// Per moving body: the angle it turned in this step so far (rad, the sum of |ω| h).
   std::vector<double> spun_;
   /// Scratch of World::solve: the contacts made within the step, and contacts_ merged with them.

@@ -88,6 +88,53 @@ double mixed_restitution(const SurfaceMaterial& a, const SurfaceMaterial& b) {
   return std::max(a.restitution, b.restitution);
 }
 
+// The point of c with the feature pair `feature` (its index), or -1.
+int point_with(const ContactConstraint& c, std::uint32_t feature) {
+  for (int k = 0; k < c.count; ++k)
+    if (c.points[k].feature == feature) return k;
+  return -1;
+}
+
+// `cc` aimed along `normal` with `points` (at least one), its rows prepared at the bodies' poses
+// now. A point cc held (by feature) keeps its impulses, totals and approach speed; what a point it
+// no longer has carried joins the totals of the new point nearest it (never its approach speed:
+// restitution acts on a point's own). The friction and twist impulses stay.
+ContactConstraint aimed(const ContactConstraint& cc, const Vec3& normal, std::span<const ManifoldPoint> points,
+                        std::span<const SolverBody> bodies, double speculative_distance) {
+  ContactConstraint now = cc;
+  now.normal = normal;
+  now.count = 0;
+  for (const ManifoldPoint& q : points)
+    now.points[now.count++] = {.position = q.point, .separation = q.separation, .feature = q.feature};
+  prepare_contact(now, bodies, speculative_distance);
+  for (int k = 0; k < now.count; ++k) {
+    const int j = point_with(cc, now.points[k].feature);
+    if (j < 0) continue;
+    ContactPoint& p = now.points[k];
+    const ContactPoint& was = cc.points[j];
+    p.normal_impulse = was.normal_impulse;
+    p.total_normal_impulse = was.total_normal_impulse;
+    p.max_normal_impulse = was.max_normal_impulse;
+    p.approach_speed = std::max(p.approach_speed, was.approach_speed);
+  }
+  for (int j = 0; j < cc.count; ++j) {
+    const ContactPoint& was = cc.points[j];
+    if (point_with(now, was.feature) >= 0) continue;
+    int near = 0;
+    for (int k = 1; k < now.count; ++k)
+      if ((now.points[k].position - was.position).squaredNorm() <
+          (now.points[near].position - was.position).squaredNorm())
+        near = k;
+    now.points[near].total_normal_impulse += was.total_normal_impulse;
+    now.points[near].max_normal_impulse = std::max(now.points[near].max_normal_impulse, was.max_normal_impulse);
+  }
+  now.friction_impulse = cc.friction_impulse;
+  now.twist_impulse = cc.twist_impulse;
+  now.total_friction_impulse = cc.total_friction_impulse;
+  now.total_twist_impulse = cc.total_twist_impulse;
+  return now;
+}
+
 // Warm start of a manifold's friction and twist from the same manifold's last step `old`: its
 // impulses re-expressed in cc's tangents (set before) and about cc's normal.
 struct CarriedFriction {
@@ -1011,7 +1058,6 @@ void World::solve() {
   }
   stats_.contacts = static_cast<std::int64_t>(active.size());
 
-  turned_.resize(n);
   spun_.resize(n);
   build_solve_groups(active, moving);
   const auto groups = static_cast<std::int64_t>(solve_group_count_);
@@ -1115,7 +1161,6 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
     s.inverse_inertia = responds ? world_inverse_inertia(b.inertia, b.rigid.orientation) : Mat3::Zero();
     s.position = b.rigid.position;
     s.rotation = b.rigid.orientation.toRotationMatrix();
-    turned_[i] = 0;
     spun_[i] = 0;
   }
   group.turn_base.assign(group.refreshable.size(), {0.0, 0.0});
@@ -1242,7 +1287,6 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
             SolverBody& s = solver_bodies_[moving[first + k]];
             s.angular_velocity = b.rigid.angular_velocity;
             s.position = b.rigid.position;
-            turned_[moving[first + k]] += h * s.angular_velocity.norm();
             spun_[moving[first + k]] += h * s.angular_velocity.norm();
           }
         },
@@ -1268,16 +1312,19 @@ void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& 
   // rotation limit went wholly under the ground in one step, and 34 mm into a resting block.
   // Found again when the turn has moved a vertex farther than its rows foresee: r (1 - cos θ) ~
   // r θ² / 2 past a quarter of the speculative distance (the depth at which collide_hull_plane
-  // adds a vertex the motion brings), θ the angle the body turned since they were found (the sum
-  // of |ω| h). Between two moving bodies, either's: the rows' normal and lever arms are fixed in
-  // the world, and a piece sliding along a turning face (a paddle sweeping it along) comes into
+  // adds a vertex the motion brings), θ the angle a moving body of the pair turned since they were
+  // found (the sum of |ω| h), either's when both move: the rows' normal and lever arms are fixed
+  // in the world, and a piece sliding along a turning face (a paddle sweeping it along) comes into
   // the face along a normal that turned away (and a piece riding it turns with it).
   const double spec = settings_.speculative_distance;
   const double left = settings_.time_step - elapsed;
   const std::vector<Contact*>& list = group.refreshable;
-  std::vector<Index> refreshed;
   std::vector<Contact*> found;  // the pair's contacts: from the step's start, then those made since
-  const auto far = [&](double turn, double radius) { return 0.5 * turn * turn * radius > 0.25 * spec; };
+  const auto turned_far = [&](Index slot, double since) {
+    const Body& body = bodies_[slot];
+    const double turn = spun_[slot] - since;
+    return moves_in_solve(body) && 0.5 * turn * turn * body.radius > 0.25 * spec;
+  };
   for (std::size_t first = 0, last = 0; first < list.size(); first = last) {
     const Index slot_a = list[first]->body_a, slot_b = list[first]->body_b;
     for (last = first + 1; last < list.size() && list[last]->body_a == slot_a && list[last]->body_b == slot_b;) ++last;
@@ -1288,16 +1335,9 @@ void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& 
     const Index other_slot = other_first ? slot_a : slot_b;
     const Body& b = bodies_[slot];
     const Body& other = bodies_[other_slot];
-    if (!moves_in_solve(other)) {
-      if (!far(turned_[slot], b.radius)) continue;
-      refreshed.push_back(slot);
-    } else {
-      std::array<double, 2>& since = group.turn_base[first];
-      if (!far(spun_[slot_a] - since[0], bodies_[slot_a].radius) &&
-          !far(spun_[slot_b] - since[1], bodies_[slot_b].radius))
-        continue;
-      since = {spun_[slot_a], spun_[slot_b]};
-    }
+    std::array<double, 2>& since = group.turn_base[first];
+    if (!turned_far(slot_a, since[0]) && !turned_far(slot_b, since[1])) continue;
+    since = {spun_[slot_a], spun_[slot_b]};  // a body that does not move: never read
     found.assign(list.begin() + static_cast<std::ptrdiff_t>(first), list.begin() + static_cast<std::ptrdiff_t>(last));
     for (Contact& c : group.made)
       if (c.body_a == slot_a && c.body_b == slot_b) found.push_back(&c);
@@ -1323,64 +1363,25 @@ void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& 
       // face ran into it. A point the contact held keeps its impulses, totals and approach speed
       // (by feature).
       const auto held_by = [&](const Contact* c, std::uint32_t feature) {
-        const ContactConstraint& cc = c->constraint;
-        return std::any_of(cc.points.begin(), cc.points.begin() + cc.count,
-                           [&](const ContactPoint& p) { return p.feature == feature; });
+        return point_with(c->constraint, feature) >= 0;
       };
       if (moving_other)
         for (Contact* c : found) {
           ContactConstraint& cc = c->constraint;
-          if (!same_pieces(c) || cc.normal.dot(m.normal) > 1 - 1e-4) continue;
-          const auto old_point = [&](std::uint32_t feature) {
-            for (int j = 0; j < cc.count; ++j)
-              if (cc.points[j].feature == feature) return j;
-            return -1;
-          };
-          if (std::none_of(m.points.begin(), m.points.begin() + m.count,
-                           [&](const ManifoldPoint& q) { return old_point(q.feature) >= 0; }))
+          if (!same_pieces(c) || cc.normal.dot(m.normal) > 1 - 1e-4 ||
+              std::none_of(m.points.begin(), m.points.begin() + m.count,
+                           [&](const ManifoldPoint& q) { return held_by(c, q.feature); }))
             continue;
+          std::array<ManifoldPoint, 4> kept{};
+          int count = 0;
+          for (int k = 0; k < m.count; ++k)
+            if (std::none_of(found.begin(), found.end(), [&](const Contact* o) {
+                  return o != c && same_pieces(o) && held_by(o, m.points[k].feature);
+                }))
+              kept[count++] = m.points[k];
+          if (count == 0) continue;
           group.batches.pull(&cc);
-          ContactConstraint now = cc;
-          now.normal = m.normal;
-          now.count = 0;
-          for (int k = 0; k < m.count; ++k) {
-            const ManifoldPoint& q = m.points[k];
-            if (std::any_of(found.begin(), found.end(),
-                            [&](const Contact* o) { return o != c && same_pieces(o) && held_by(o, q.feature); }))
-              continue;
-            now.points[now.count++] = {.position = q.point, .separation = q.separation, .feature = q.feature};
-          }
-          if (now.count == 0) continue;
-          prepare_contact(now, solver_bodies_, spec);
-          for (int k = 0; k < now.count; ++k) {
-            const int j = old_point(now.points[k].feature);
-            if (j < 0) continue;
-            ContactPoint& p = now.points[k];
-            const ContactPoint& was = cc.points[j];
-            p.normal_impulse = was.normal_impulse;
-            p.total_normal_impulse = was.total_normal_impulse;
-            p.max_normal_impulse = was.max_normal_impulse;
-            p.approach_speed = std::max(p.approach_speed, was.approach_speed);
-          }
-          // A point the manifold no longer has hands what it carried to the nearest of the new.
-          for (int j = 0; j < cc.count; ++j) {
-            const ContactPoint& was = cc.points[j];
-            if (std::any_of(now.points.begin(), now.points.begin() + now.count,
-                            [&](const ContactPoint& p) { return p.feature == was.feature; }))
-              continue;
-            int near = 0;
-            for (int k = 1; k < now.count; ++k)
-              if ((now.points[k].position - was.position).squaredNorm() <
-                  (now.points[near].position - was.position).squaredNorm())
-                near = k;
-            now.points[near].total_normal_impulse += was.total_normal_impulse;
-            now.points[near].max_normal_impulse = std::max(now.points[near].max_normal_impulse, was.max_normal_impulse);
-          }
-          now.friction_impulse = cc.friction_impulse;
-          now.twist_impulse = cc.twist_impulse;
-          now.total_friction_impulse = cc.total_friction_impulse;
-          now.total_twist_impulse = cc.total_twist_impulse;
-          cc = now;
+          cc = aimed(cc, m.normal, std::span(kept.data(), count), solver_bodies_, spec);
           group.batches.reload(&cc, solver_bodies_);
           changed = true;
         }
@@ -1521,7 +1522,6 @@ void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& 
     if (changed)
       for (Contact* c : found) c->origin.margin = -1;
   }
-  for (const Index slot : refreshed) turned_[slot] = 0;
 }
 
 void World::update_sleep() {
