@@ -1034,6 +1034,8 @@ TEST(World, APieceSweptByATurningPaddleStaysOutOfIt) {
       past_4mm += sweep_deepest > 0.004;
       deepest = std::max(deepest, sweep_deepest);
     }
+    // In the 6 mm paddle a vertex halfway through is only 3 mm deep: there, passing through
+    // (above) is what is checked.
     if (thickness == 0.02) {
       // Aimed again only when a vertex came down (r θ² / 2, the paddle's r): 21 of 60 sweeps past
       // 4 mm, 8.3 mm deep; now every substep's turn past 0.8°: 7, 6.4 mm. What is left is the
