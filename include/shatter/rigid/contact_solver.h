@@ -132,6 +132,12 @@ struct ContactSolverSettings {
   /// a piece on the ground, landing on it at 1 to 5 m/s, drives it at most 0.34 mm into the ground,
   /// against up to 38 mm without (the piece is 4 cm thick).
   double shock_mass_ratio = 4;
+  /// A dynamic body at least this many times heavier than the other body of a contact is met as a
+  /// wall: the contact takes the stiffer spring of contacts with static and kinematic bodies (twice
+  /// the hertz, half the damping). The light body barely moves it, so the pair is as stable as
+  /// against the ground, and a piece swept along by a heavy spinning body gives way half as much
+  /// under the ride (docs/method.md, "No tunnelling"). 0: off.
+  double wall_mass_ratio = 10;
 };
 
 /// Fill the constraint's derived data once per step, from points whose position and separation

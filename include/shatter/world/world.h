@@ -634,8 +634,9 @@ class World {
     /// the step when one of the pair's moving bodies turns far (refresh_contacts).
     std::vector<Contact*> refreshable;
     /// Per refreshable contact that is its pair's first: its two bodies' World::spun_ when the
-    /// pair's contacts were last found (zero: at the step's start).
-    std::vector<std::array<double, 2>> turn_base;
+    /// pair's contacts were last found, and the time into the step then, s (zeros: at the step's
+    /// start).
+    std::vector<std::array<double, 3>> turn_base;
     /// Contacts made within the step for points that found no place in the step's; a deque, so
     /// that the solver's pointers to them hold. Merged into contacts_ after the solve.
     std::deque<Contact> made;
@@ -648,6 +649,9 @@ class World {
   std::vector<Index> solve_parent_;
   /// Whether the solver moves the body this step (awake and not static; kinematic bodies included).
   static bool moves_in_solve(const Body& b) { return b.awake && b.type != BodyType::static_body; }
+  /// Whether a contact of these bodies takes the stiffer spring of contacts with static and
+  /// kinematic bodies (ContactSolverSettings::wall_mass_ratio).
+  [[nodiscard]] bool wall_like(const Body& a, const Body& b) const;
   void build_solve_groups(std::span<Contact* const> active, std::span<const Index> moving);
   void solve_group(SolveGroup& group, double h, double inverse_h);
   /// Within a group's step, after `elapsed` seconds of it: the refreshable contacts of each pair

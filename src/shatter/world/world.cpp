@@ -1163,9 +1163,10 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
     s.rotation = b.rigid.orientation.toRotationMatrix();
     spun_[i] = 0;
   }
-  group.turn_base.assign(group.refreshable.size(), {0.0, 0.0});
+  group.turn_base.assign(group.refreshable.size(), {0.0, 0.0, 0.0});
   // Box3D's choices: the spring at most an eighth of the substep rate; contacts with static and
-  // kinematic bodies twice as stiff and half as damped, so nothing is pushed into the ground.
+  // kinematic bodies twice as stiff and half as damped, so nothing is pushed into the ground (and
+  // so are those with a dynamic body much heavier than the other: wall_like).
   const double hertz = std::min(settings_.contact.contact_hertz, 0.125 / h);
   const Softness soft = make_softness(hertz, settings_.contact.damping_ratio, h);
   const Softness static_soft = make_softness(2 * hertz, 0.5 * settings_.contact.damping_ratio, h);
@@ -1175,7 +1176,7 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
     const Body& b = bodies_[cc.body_b];
     cc.friction = mixed_friction(a.surface, b.surface);
     cc.restitution = mixed_restitution(a.surface, b.surface);
-    cc.softness = (a.type == BodyType::dynamic && b.type == BodyType::dynamic) ? soft : static_soft;
+    cc.softness = wall_like(a, b) ? static_soft : soft;
     prepare_contact(cc, solver_bodies_, settings_.speculative_distance);
   }
 
@@ -1305,6 +1306,14 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
   }
 }
 
+bool World::wall_like(const Body& a, const Body& b) const {
+  if (a.type != BodyType::dynamic || b.type != BodyType::dynamic) return true;
+  const double ratio = settings_.contact.wall_mass_ratio;
+  if (!(ratio > 0)) return false;
+  const double ia = a.inertia.inverse_mass, ib = b.inertia.inverse_mass;
+  return ia > ratio * ib || ib > ratio * ia;
+}
+
 void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& soft, const Softness& static_soft) {
   // A pair's contacts were found at the step's start, from the poses then, and the solver holds
   // their points with rows fixed at those poses. A body turned far within the step (a blow, a
@@ -1335,6 +1344,33 @@ void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& 
     if (body.type == BodyType::kinematic && 0.5 * turn * turn > 1 - same_normal) return true;
     return 0.5 * turn * turn * body.radius > 0.25 * spec;
   };
+  // A piece sliding along a turning dynamic body's face (a heavy rotor sweeping it along) goes
+  // into the face by the slide times the angle its normal lags the face: found again once that
+  // passes a sixteenth of the speculative distance. The slide is the tangential speed at the
+  // pair's first point times the time since found: resting and rolling pieces, turning but not
+  // sliding, stay put.
+  const auto slid_far = [&](Index slot_a, Index slot_b, const std::array<double, 3>& since, const Contact& c) {
+    const Body& ba = bodies_[slot_a];
+    const Body& bb = bodies_[slot_b];
+    const double turn = std::max(moves_in_solve(ba) ? spun_[slot_a] - since[0] : 0.0,
+                                 moves_in_solve(bb) ? spun_[slot_b] - since[1] : 0.0);
+    const SolverBody& sa = solver_bodies_[slot_a];
+    const SolverBody& sb = solver_bodies_[slot_b];
+    // First a bound from the bodies alone (resting pieces end here, without reading the contact).
+    const double dt = elapsed - since[2];
+    const auto speed = [](const Body& b, const SolverBody& s) {
+      return moves_in_solve(b) ? s.linear_velocity.norm() + s.angular_velocity.norm() * b.radius : 0.0;
+    };
+    const double fastest = speed(ba, sa) + speed(bb, sb);
+    if (!(fastest * dt * turn > spec / 16)) return false;
+    const ContactConstraint& cc = c.constraint;
+    if (cc.count == 0 || !(cc.points[0].normal_impulse > 0)) return false;  // not pressed: not riding
+    const Vec3 ra = sa.rotation * cc.points[0].local_anchor_a;
+    const Vec3 rb = sb.rotation * cc.points[0].local_anchor_b;
+    const Vec3 v =
+        sb.linear_velocity + sb.angular_velocity.cross(rb) - sa.linear_velocity - sa.angular_velocity.cross(ra);
+    return (v - cc.normal.dot(v) * cc.normal).norm() * dt * turn > spec / 16;
+  };
   for (std::size_t first = 0, last = 0; first < list.size(); first = last) {
     const Index slot_a = list[first]->body_a, slot_b = list[first]->body_b;
     for (last = first + 1; last < list.size() && list[last]->body_a == slot_a && list[last]->body_b == slot_b;) ++last;
@@ -1345,9 +1381,11 @@ void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& 
     const Index other_slot = other_first ? slot_a : slot_b;
     const Body& b = bodies_[slot];
     const Body& other = bodies_[other_slot];
-    std::array<double, 2>& since = group.turn_base[first];
-    if (!turned_far(slot_a, since[0]) && !turned_far(slot_b, since[1])) continue;
-    since = {spun_[slot_a], spun_[slot_b]};  // a body that does not move: never read
+    std::array<double, 3>& since = group.turn_base[first];
+    if (!turned_far(slot_a, since[0]) && !turned_far(slot_b, since[1]) &&
+        !slid_far(slot_a, slot_b, since, *list[first]))
+      continue;
+    since = {spun_[slot_a], spun_[slot_b], elapsed};  // a body that does not move: never read
     found.assign(list.begin() + static_cast<std::ptrdiff_t>(first), list.begin() + static_cast<std::ptrdiff_t>(last));
     for (Contact& c : group.made)
       if (c.body_a == slot_a && c.body_b == slot_b) found.push_back(&c);
@@ -1358,7 +1396,7 @@ void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& 
     // is zero when it does not move).
     const double margin = spec + left * (s.linear_velocity.norm() + s.angular_velocity.norm() * b.radius) +
                           left * (so.linear_velocity.norm() + so.angular_velocity.norm() * other.radius);
-    const Softness& pair_soft = b.type == BodyType::dynamic && other.type == BodyType::dynamic ? soft : static_soft;
+    const Softness& pair_soft = wall_like(b, other) ? static_soft : soft;
     const bool moving_other = moves_in_solve(other);
     bool changed = false;
     // The manifold `m` (its normal from A to B) of the pieces `piece_a`, `piece_b` at the pose now,
