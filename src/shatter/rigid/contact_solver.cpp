@@ -253,6 +253,7 @@ void push_off_supported(const ContactConstraint& c, std::span<SolverBody> bodies
   PairMotion m(c, bodies);
   const PointGaps gaps(c, bodies);
   const double inverse_mass = supported_is_a ? m.inverse_mass_b : m.inverse_mass_a;
+  double pushed = 0;  // the normal impulse applied, N s
   for (int i = 0; i < c.count; ++i) {
     const ContactPoint& p = c.points[i];
     const double s = gaps.at(p);
@@ -265,12 +266,38 @@ void push_off_supported(const ContactConstraint& c, std::span<SolverBody> bodies
     const double k = supported_is_a ? inverse_mass + p.rn_b.dot(p.ang_b) : inverse_mass + p.rn_a.dot(p.ang_a);
     if (!(k > 0)) continue;
     const double l = (target - vn) / k;
+    pushed += l;
     if (supported_is_a) {
       m.vb += (inverse_mass * l) * c.normal;
       m.wb += l * p.ang_b;
     } else {
       m.va -= (inverse_mass * l) * c.normal;
       m.wa -= l * p.ang_a;
+    }
+  }
+  // The push's own friction: the pushes at points off the centre turn the body, and a turn slides
+  // its contact face; within the friction cone of what was pushed, the sliding they left at the
+  // friction centre is taken out again (of the moving body alone, as the pushes).
+  if (pushed > 0 && c.friction > 0) {
+    const double limit = c.friction * pushed;
+    Eigen::Vector2d applied = Eigen::Vector2d::Zero();
+    for (int j = 0; j < 2; ++j) {
+      const Vec3& t = c.tangents[j];
+      const double vt = m.row_velocity(t, c.rt_a[j], c.rt_b[j]);
+      const double k =
+          supported_is_a ? inverse_mass + c.rt_b[j].dot(c.ang_tb[j]) : inverse_mass + c.rt_a[j].dot(c.ang_ta[j]);
+      if (!(k > 0)) continue;
+      applied[j] = -vt / k;
+    }
+    if (const double n = applied.norm(); n > limit) applied *= limit / n;
+    for (int j = 0; j < 2; ++j) {
+      if (supported_is_a) {
+        m.vb += (inverse_mass * applied[j]) * c.tangents[j];
+        m.wb += applied[j] * c.ang_tb[j];
+      } else {
+        m.va -= (inverse_mass * applied[j]) * c.tangents[j];
+        m.wa -= applied[j] * c.ang_ta[j];
+      }
     }
   }
   m.store(c, bodies);
