@@ -128,9 +128,9 @@ struct ContactSolverSettings {
   double restitution_threshold = 1;  ///< approach speed below which contacts do not bounce, m/s
   /// Shock propagation: a body at least this many times heavier than a body it presses into that
   /// body's support (something that does not move: static, kinematic or asleep) is stopped by it as
-  /// by a wall (push_off_supported, after each pass, with the friction of that push). 0: off. A block 10 to 100 times heavier than
-  /// a piece on the ground, landing on it at 1 to 5 m/s, drives it at most 0.34 mm into the ground,
-  /// against up to 38 mm without (the piece is 4 cm thick).
+  /// by a wall (push_off_supported, after each pass, with the friction of that push). 0: off. A
+  /// block 10 to 100 times heavier than a piece on the ground, landing on it at 1 to 5 m/s, drives
+  /// it at most 0.34 mm into the ground, against up to 38 mm without (the piece is 4 cm thick).
   double shock_mass_ratio = 4;
   /// A dynamic body at least this many times heavier than the other body of a contact is met as a
   /// wall: the contact takes the stiffer spring of contacts with static and kinematic bodies (twice
@@ -156,8 +156,9 @@ void prepare_contact(ContactConstraint& c, std::span<const SolverBody> bodies, d
 /// mass: a 14 kg block landing at 3 m/s on a 1.4 kg piece on the ground drove it 6 mm into the
 /// ground, a 41 kg one 29 mm (docs/method.md, "No tunnelling"). The pushes at points off the
 /// friction centre turn the body, which slides its face: the sliding they leave there is taken out
-/// again within the friction cone of the pushed impulse (without it, a box 5 to 100 times heavier
-/// than the box it rests on crept 29 mm in 10 s, median of 20 stacks, and 4 of them fell off).
+/// again within the friction cone of the pushed impulse (without it, a box 3 to 100 times heavier
+/// than the box it rests on crept 32 mm in 10 s, median of 24 stacks, and 4 of them fell off:
+/// World.AHeavyBoxRestsOnALightOne).
 /// The impulses are not accumulated: nothing warm-starts from them, and the step's totals for
 /// impacts do not count them.
 void push_off_supported(const ContactConstraint& c, std::span<SolverBody> bodies, bool supported_is_a, double inverse_h,

@@ -253,6 +253,20 @@ void push_off_supported(const ContactConstraint& c, std::span<SolverBody> bodies
   PairMotion m(c, bodies);
   const PointGaps gaps(c, bodies);
   const double inverse_mass = supported_is_a ? m.inverse_mass_b : m.inverse_mass_a;
+  // Impulse l along row direction d (rows r = anchor x d, angular responses ang = I^-1 r) on the
+  // moving body alone: its own effective mass along the row, and the push.
+  const auto own_mass = [&](const Vec3& r_a, const Vec3& ang_a, const Vec3& r_b, const Vec3& ang_b) {
+    return supported_is_a ? inverse_mass + r_b.dot(ang_b) : inverse_mass + r_a.dot(ang_a);
+  };
+  const auto push = [&](const Vec3& d, const Vec3& ang_a, const Vec3& ang_b, double l) {
+    if (supported_is_a) {
+      m.vb += (inverse_mass * l) * d;
+      m.wb += l * ang_b;
+    } else {
+      m.va -= (inverse_mass * l) * d;
+      m.wa -= l * ang_a;
+    }
+  };
   double pushed = 0;  // the normal impulse applied, N s
   for (int i = 0; i < c.count; ++i) {
     const ContactPoint& p = c.points[i];
@@ -262,43 +276,24 @@ void push_off_supported(const ContactConstraint& c, std::span<SolverBody> bodies
         s > 0 ? -s * inverse_h : (use_bias ? std::min(-c.softness.bias_rate * s, max_push_velocity) : 0.0);
     const double vn = m.row_velocity(c.normal, p.rn_a, p.rn_b);
     if (vn >= target) continue;
-    // The moving body's own effective mass at the point.
-    const double k = supported_is_a ? inverse_mass + p.rn_b.dot(p.ang_b) : inverse_mass + p.rn_a.dot(p.ang_a);
+    const double k = own_mass(p.rn_a, p.ang_a, p.rn_b, p.ang_b);
     if (!(k > 0)) continue;
     const double l = (target - vn) / k;
     pushed += l;
-    if (supported_is_a) {
-      m.vb += (inverse_mass * l) * c.normal;
-      m.wb += l * p.ang_b;
-    } else {
-      m.va -= (inverse_mass * l) * c.normal;
-      m.wa -= l * p.ang_a;
-    }
+    push(c.normal, p.ang_a, p.ang_b, l);
   }
   // The push's own friction: the pushes at points off the centre turn the body, and a turn slides
   // its contact face; within the friction cone of what was pushed, the sliding they left at the
-  // friction centre is taken out again (of the moving body alone, as the pushes).
+  // friction centre is taken out again.
   if (pushed > 0 && c.friction > 0) {
-    const double limit = c.friction * pushed;
     Eigen::Vector2d applied = Eigen::Vector2d::Zero();
     for (int j = 0; j < 2; ++j) {
-      const Vec3& t = c.tangents[j];
-      const double vt = m.row_velocity(t, c.rt_a[j], c.rt_b[j]);
-      const double k =
-          supported_is_a ? inverse_mass + c.rt_b[j].dot(c.ang_tb[j]) : inverse_mass + c.rt_a[j].dot(c.ang_ta[j]);
-      if (!(k > 0)) continue;
-      applied[j] = -vt / k;
+      const double k = own_mass(c.rt_a[j], c.ang_ta[j], c.rt_b[j], c.ang_tb[j]);
+      if (k > 0) applied[j] = -m.row_velocity(c.tangents[j], c.rt_a[j], c.rt_b[j]) / k;
     }
+    const double limit = c.friction * pushed;
     if (const double n = applied.norm(); n > limit) applied *= limit / n;
-    for (int j = 0; j < 2; ++j) {
-      if (supported_is_a) {
-        m.vb += (inverse_mass * applied[j]) * c.tangents[j];
-        m.wb += applied[j] * c.ang_tb[j];
-      } else {
-        m.va -= (inverse_mass * applied[j]) * c.tangents[j];
-        m.wa -= applied[j] * c.ang_ta[j];
-      }
-    }
+    for (int j = 0; j < 2; ++j) push(c.tangents[j], c.ang_ta[j], c.ang_tb[j], applied[j]);
   }
   m.store(c, bodies);
 }

@@ -1349,6 +1349,7 @@ void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& 
   // passes a sixteenth of the speculative distance. The slide is the tangential speed at the
   // pair's first point times the time since found: resting and rolling pieces, turning but not
   // sliding, stay put.
+  const double slide_depth = spec / 16;
   const auto slid_far = [&](Index slot_a, Index slot_b, const std::array<double, 3>& since, const Contact& c) {
     const Body& ba = bodies_[slot_a];
     const Body& bb = bodies_[slot_b];
@@ -1362,14 +1363,14 @@ void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& 
       return moves_in_solve(b) ? s.linear_velocity.norm() + s.angular_velocity.norm() * b.radius : 0.0;
     };
     const double fastest = speed(ba, sa) + speed(bb, sb);
-    if (!(fastest * dt * turn > spec / 16)) return false;
+    if (!(fastest * dt * turn > slide_depth)) return false;
     const ContactConstraint& cc = c.constraint;
     if (cc.count == 0 || !(cc.points[0].normal_impulse > 0)) return false;  // not pressed: not riding
     const Vec3 ra = sa.rotation * cc.points[0].local_anchor_a;
     const Vec3 rb = sb.rotation * cc.points[0].local_anchor_b;
     const Vec3 v =
         sb.linear_velocity + sb.angular_velocity.cross(rb) - sa.linear_velocity - sa.angular_velocity.cross(ra);
-    return (v - cc.normal.dot(v) * cc.normal).norm() * dt * turn > spec / 16;
+    return (v - cc.normal.dot(v) * cc.normal).norm() * dt * turn > slide_depth;
   };
   for (std::size_t first = 0, last = 0; first < list.size(); first = last) {
     const Index slot_a = list[first]->body_a, slot_b = list[first]->body_b;
