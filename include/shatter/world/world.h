@@ -645,6 +645,10 @@ class World {
   /// Per solver body, the sum of the normals (into it) of its contacts with bodies that do not
   /// move in the solve (set per step for the moving bodies; shock propagation).
   std::vector<Vec3> support_normal_;
+  /// Per solver body, whether a heavier dynamic body presses it into its support this step
+  /// (ContactSolverSettings::pressed_mass_ratio): its contacts with the support take the softer
+  /// spring (set per step for the moving bodies).
+  std::vector<std::uint8_t> pressed_into_support_;
   std::size_t solve_group_count_ = 0;
   std::vector<Index> solve_parent_;
   /// Whether the solver moves the body this step (awake and not static; kinematic bodies included).
@@ -652,6 +656,10 @@ class World {
   /// Whether a contact of these bodies takes the stiffer spring of contacts with static and
   /// kinematic bodies (ContactSolverSettings::wall_mass_ratio).
   [[nodiscard]] bool wall_like(const Body& a, const Body& b) const;
+  /// The spring of a contact between the bodies in slots a and b this step: the stiffer one when
+  /// wall_like, unless the dynamic body is pressed into the other by a heavier body
+  /// (pressed_into_support_).
+  [[nodiscard]] Softness contact_softness(Index a, Index b, const Softness& soft, const Softness& static_soft) const;
   void build_solve_groups(std::span<Contact* const> active, std::span<const Index> moving);
   void solve_group(SolveGroup& group, double h, double inverse_h);
   /// Within a group's step, after `elapsed` seconds of it: the refreshable contacts of each pair

@@ -1026,6 +1026,7 @@ void World::solve() {
   // each group sets up its own moving bodies (solve_group).
   solver_bodies_.resize(n);
   support_normal_.resize(n);
+  pressed_into_support_.resize(n);
   std::vector<Index> moving;
   for (Index i = 0; i < n; ++i) {
     const Body& b = bodies_[i];
@@ -1176,7 +1177,6 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
     const Body& b = bodies_[cc.body_b];
     cc.friction = mixed_friction(a.surface, b.surface);
     cc.restitution = mixed_restitution(a.surface, b.surface);
-    cc.softness = wall_like(a, b) ? static_soft : soft;
     prepare_contact(cc, solver_bodies_, settings_.speculative_distance);
   }
 
@@ -1193,10 +1193,15 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
     if (const double w2 = s.angular_velocity.squaredNorm(); w2 > max_spin * max_spin)
       s.angular_velocity *= max_spin / std::sqrt(w2);
   };
-  // Shock propagation: a heavy body pressing a light one into its support stops against it.
+  // A light body pressed into its support by a heavier one: it meets the support with the softer
+  // spring (pressed_mass_ratio), and the heavier body stops against it (shock propagation,
+  // shock_mass_ratio).
   group.shock.clear();
   group.shock_support.clear();
-  if (const double ratio = settings_.contact.shock_mass_ratio; ratio > 0) {
+  for (const Index i : moving) pressed_into_support_[i] = 0;
+  const double shock_ratio = settings_.contact.shock_mass_ratio;
+  const double pressed_ratio = settings_.contact.pressed_mass_ratio;
+  if (shock_ratio > 0 || pressed_ratio > 0) {
     for (const Index i : moving) support_normal_[i].setZero();
     for (ContactConstraint* c : group.constraints) {
       if (c->a_responds == c->b_responds) continue;
@@ -1205,18 +1210,23 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
       else
         support_normal_[c->body_a] -= c->normal;
     }
+    // The smaller of the two ratios that are on: a pair lighter than it is neither.
+    const double least = shock_ratio > 0 && pressed_ratio > 0 ? std::min(shock_ratio, pressed_ratio)
+                                                              : std::max(shock_ratio, pressed_ratio);
     for (ContactConstraint* c : group.constraints) {
       if (!c->a_responds || !c->b_responds) continue;
       const double ma = solver_bodies_[c->body_a].inverse_mass, mb = solver_bodies_[c->body_b].inverse_mass;
-      // The lighter body: its inverse mass at least `ratio` times the other's.
-      const bool light_a = ma >= ratio * mb;
-      if (!light_a && !(mb >= ratio * ma)) continue;
+      // The lighter body: its inverse mass at least `least` times the other's.
+      const bool light_a = ma >= least * mb;
+      if (!light_a && !(mb >= least * ma)) continue;
       const Index light = light_a ? c->body_a : c->body_b;
       const Vec3& up = support_normal_[light];
       // Pressed into its support: the push on it (from the other body) against its support's.
       const Vec3 push = light_a ? Vec3(-c->normal) : c->normal;
       if (!(push.dot(up) < -0.5 * up.norm())) continue;
-      group.shock.emplace_back(c, light_a);
+      const auto heavier_by = [&](double r) { return r > 0 && (light_a ? ma >= r * mb : mb >= r * ma); };
+      if (heavier_by(pressed_ratio)) pressed_into_support_[light] = 1;
+      if (heavier_by(shock_ratio)) group.shock.emplace_back(c, light_a);
     }
     if (!group.shock.empty())
       for (ContactConstraint* c : group.constraints) {
@@ -1229,13 +1239,18 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
           }
       }
   }
-  // After a pass: the heavy bodies stop against the light ones, then the light ones against their
-  // support.
+  for (ContactConstraint* c : group.constraints)
+    c->softness = contact_softness(c->body_a, c->body_b, soft, static_soft);
+  // After a pass, from the bottom up (Guendelman et al.'s order): the light bodies stop against
+  // their support, then the heavy ones against the light ones. The other way round, the heavy body
+  // was stopped against the light body's velocity before that body's own push moved it, which the
+  // heavy body then met in the next pass: a 10 cm box ten times as dense as the box under it
+  // rocked at up to 140 mm/s (docs/method.md, "Heavy on light").
   const auto push_off = [&](bool use_bias) {
-    for (const auto& [c, light_a] : group.shock)
-      push_off_supported(*c, solver_bodies_, light_a, inverse_h, use_bias, settings_.contact.max_push_velocity);
     for (const auto& [c, support_a] : group.shock_support)
       push_off_supported(*c, solver_bodies_, support_a, inverse_h, use_bias, settings_.contact.max_push_velocity);
+    for (const auto& [c, light_a] : group.shock)
+      push_off_supported(*c, solver_bodies_, light_a, inverse_h, use_bias, settings_.contact.max_push_velocity);
   };
   // Four constraints at a time, in an order that depends only on the constraints' (contact_batches.h).
   ContactBatches& batches = group.batches;
@@ -1312,6 +1327,18 @@ bool World::wall_like(const Body& a, const Body& b) const {
   if (!(ratio > 0)) return false;
   const double ia = a.inertia.inverse_mass, ib = b.inertia.inverse_mass;
   return ia > ratio * ib || ib > ratio * ia;
+}
+
+Softness World::contact_softness(Index a, Index b, const Softness& soft, const Softness& static_soft) const {
+  const Body& ba = bodies_[a];
+  const Body& bb = bodies_[b];
+  if (!wall_like(ba, bb)) return soft;
+  // Met as a wall; but a dynamic body pressed into a static or kinematic one by a heavier body
+  // meets it with the softer spring (the flag is set for moving bodies only).
+  const bool a_pressed = ba.type == BodyType::dynamic && moves_in_solve(ba) && pressed_into_support_[a] != 0;
+  const bool b_pressed = bb.type == BodyType::dynamic && moves_in_solve(bb) && pressed_into_support_[b] != 0;
+  return (a_pressed && bb.type != BodyType::dynamic) || (b_pressed && ba.type != BodyType::dynamic) ? soft
+                                                                                                    : static_soft;
 }
 
 void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& soft, const Softness& static_soft) {
@@ -1397,7 +1424,7 @@ void World::refresh_contacts(SolveGroup& group, double elapsed, const Softness& 
     // is zero when it does not move).
     const double margin = spec + left * (s.linear_velocity.norm() + s.angular_velocity.norm() * b.radius) +
                           left * (so.linear_velocity.norm() + so.angular_velocity.norm() * other.radius);
-    const Softness& pair_soft = wall_like(b, other) ? static_soft : soft;
+    const Softness pair_soft = contact_softness(slot, other_slot, soft, static_soft);
     const bool moving_other = moves_in_solve(other);
     bool changed = false;
     // The manifold `m` (its normal from A to B) of the pieces `piece_a`, `piece_b` at the pose now,
