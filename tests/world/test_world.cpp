@@ -848,7 +848,7 @@ double deepest_crushed_piece(double shock_mass_ratio) {
 }
 
 TEST(World, AHeavyBodyStopsAgainstALightOneOnTheGround) {
-  // Measured: 0.37 mm with it, 38 mm (almost the piece's 4 cm) without.
+  // Measured: 0.39 mm with it, 38 mm (almost the piece's 4 cm) without.
   EXPECT_GT(deepest_crushed_piece(4), -0.001);
   EXPECT_LT(deepest_crushed_piece(0), -0.02);
 }
@@ -901,13 +901,14 @@ HeavyOnLight heavy_on_light_stacks() {
 TEST(World, AHeavyBoxRestsOnALightOne) {
   // Without the push's friction: 4 of 24 fell off, median 32 mm; with it none, 16 mm, but the
   // pair rocked from a mass ratio of 3 on (29-180 mm/s). The light box now meets the ground with
-  // the softer spring (pressed_mass_ratio) and the pushes go from the bottom up: median 0.15 mm,
-  // at most 6.9 mm/s up to 10 times, 32 mm/s at 20 to 100 (docs/method.md, "Heavy on light").
+  // the softer spring (pressed_mass_ratio), the pushes go from the bottom up and such islands take
+  // one more relax pass (mass_ratio_relax_passes): median 0.1 mm, at most 9.4 mm/s up to 10
+  // times, 23 mm/s at 20 to 100 (docs/method.md, "Heavy on light").
   const HeavyOnLight r = heavy_on_light_stacks();
   EXPECT_EQ(r.fell, 0);
   EXPECT_LT(r.median_drift, 0.002);
   EXPECT_LT(r.fastest_to_10, 0.015);
-  EXPECT_LT(r.fastest, 0.06);
+  EXPECT_LT(r.fastest, 0.04);
 }
 
 // A piece hanging 9 cm above the ground, still, and a body above it coming down at 16 m/s: the

@@ -620,7 +620,10 @@ class World {
   /// Moving bodies joined by their constraints (islands, with the moving kinematic bodies they
   /// touch), packed in body order into groups that World::solve steps through all substeps at once.
   struct SolveGroup {
-    std::vector<Index> moving;                    ///< awake non-static bodies, by slot
+    std::vector<Index> moving;  ///< awake non-static bodies, by slot
+    /// Relax passes per substep beyond the one every group takes (components with widely
+    /// different masses: ContactSolverSettings::mass_ratio_relax_passes).
+    int extra_relax_passes = 0;
     std::vector<ContactConstraint*> constraints;  ///< in the order of contacts_
     ContactBatches batches;
     /// Shock propagation this step (ContactSolverSettings::shock_mass_ratio): the constraints whose

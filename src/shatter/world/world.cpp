@@ -1109,28 +1109,51 @@ void World::build_solve_groups(std::span<Contact* const> active, std::span<const
   auto moves = [&](Index i) { return moves_in_solve(bodies_[i]); };
   for (const Contact* c : active)
     if (moves(c->body_a) && moves(c->body_b)) unite(solve_parent_, c->body_a, c->body_b);
-  // Components numbered in the order of their first body; consecutive components fill a group up
-  // to solve_group_bodies moving bodies.
+  // Components where a dynamic body rests on a support (a body the solve does not move, or a
+  // kinematic one) and touches a dynamic body at least the shock ratio heavier take extra relax
+  // passes (ContactSolverSettings::mass_ratio_relax_passes). They are grouped apart from the
+  // others, so that each component is solved the same whatever components share its group.
+  std::vector<std::uint8_t> heavy(n, 0);
+  const double ratio = settings_.contact.shock_mass_ratio;
+  if (ratio > 0 && settings_.contact.mass_ratio_relax_passes > 0) {
+    const auto responds = [&](Index i) { return bodies_[i].type == BodyType::dynamic && moves(i); };
+    std::vector<std::uint8_t> supported(n, 0);
+    for (const Contact* c : active)
+      if (responds(c->body_a) != responds(c->body_b)) supported[responds(c->body_a) ? c->body_a : c->body_b] = 1;
+    for (const Contact* c : active) {
+      if (!responds(c->body_a) || !responds(c->body_b)) continue;
+      const double ia = bodies_[c->body_a].inertia.inverse_mass, ib = bodies_[c->body_b].inertia.inverse_mass;
+      if ((ia >= ratio * ib && supported[c->body_a] != 0) || (ib >= ratio * ia && supported[c->body_b] != 0))
+        heavy[find_root(solve_parent_, c->body_a)] = 1;
+    }
+  }
+  // Components numbered in the order of their first body; consecutive components of each kind
+  // fill a group up to solve_group_bodies moving bodies.
   std::vector<Index> group_of_root(n, -1);
   std::size_t count = 0;
-  std::int64_t filled = 0;
-  auto open_group = [&] {
+  std::array<std::int64_t, 2> open{-1, -1};  // the group each kind fills, -1: none yet
+  std::array<std::int64_t, 2> filled{0, 0};
+  auto open_group = [&](int kind) {
     if (solve_groups_.size() <= count) solve_groups_.emplace_back();
-    solve_groups_[count].moving.clear();
-    solve_groups_[count].constraints.clear();
-    solve_groups_[count].refreshable.clear();
-    solve_groups_[count].made.clear();
+    SolveGroup& g = solve_groups_[count];
+    g.moving.clear();
+    g.constraints.clear();
+    g.refreshable.clear();
+    g.made.clear();
+    g.extra_relax_passes = kind == 1 ? settings_.contact.mass_ratio_relax_passes : 0;
+    open[kind] = static_cast<std::int64_t>(count);
     ++count;
-    filled = 0;
+    filled[kind] = 0;
   };
   for (const Index i : moving) {
     const Index root = find_root(solve_parent_, i);
+    const int kind = heavy[root];
     if (group_of_root[root] < 0) {
-      if (count == 0 || filled >= settings_.solve_group_bodies) open_group();
-      group_of_root[root] = static_cast<Index>(count - 1);
+      if (open[kind] < 0 || filled[kind] >= settings_.solve_group_bodies) open_group(kind);
+      group_of_root[root] = static_cast<Index>(open[kind]);
     }
     solve_groups_[group_of_root[root]].moving.push_back(i);
-    ++filled;
+    ++filled[kind];
   }
   solve_group_count_ = count;
   for (Contact* c : active) {
@@ -1307,8 +1330,12 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
           }
         },
         (settings_.parallel_min_bodies + 3) / 4);  // groups: the same threshold in bodies
-    batches.solve(solver_bodies_, inverse_h, false, settings_.contact.max_push_velocity);
-    push_off(false);
+    // Relax, again where masses differ widely: one Gauss-Seidel pass converges slowly across
+    // them (a 10 cm box 20 times as dense as the box under it: 24 → 13 mm/s with one more).
+    for (int pass = 0; pass <= group.extra_relax_passes; ++pass) {
+      batches.solve(solver_bodies_, inverse_h, false, settings_.contact.max_push_velocity);
+      push_off(false);
+    }
   }
   batches.store();
   for (ContactConstraint* c : group.constraints)
