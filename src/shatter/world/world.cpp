@@ -31,6 +31,12 @@ double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std
 
 Transform transform_of(const RigidState& r) { return {r.orientation.toRotationMatrix(), r.position}; }
 
+// Whether a push along `push` (on a body, from another dynamic body) presses it into its supports,
+// whose contact normals into it sum to `support_normal`: against them, within 60 degrees.
+bool presses_into(const Vec3& push, const Vec3& support_normal) {
+  return push.dot(support_normal) < -0.5 * support_normal.norm();
+}
+
 // World box of a body-frame box under a rigid placement.
 Aabb transform_box(const Aabb& local, const Transform& t) {
   if (local.empty()) return local;
@@ -1109,14 +1115,14 @@ void World::build_solve_groups(std::span<Contact* const> active, std::span<const
   auto moves = [&](Index i) { return moves_in_solve(bodies_[i]); };
   for (const Contact* c : active)
     if (moves(c->body_a) && moves(c->body_b)) unite(solve_parent_, c->body_a, c->body_b);
-  // Components where a dynamic body at least the shock ratio heavier presses a dynamic body into
-  // its support (a body the solve does not move, or a kinematic one) take extra relax passes:
+  // Components where a dynamic body at least twice the shock ratio heavier presses a dynamic body
+  // into its support (a body the solve does not move, or a kinematic one) take extra relax passes:
   // one, and one more each time the ratio doubles, up to
   // ContactSolverSettings::mass_ratio_relax_passes. Components are grouped by that count, so that
   // each is solved the same whatever components share its group.
   const double ratio = settings_.contact.shock_mass_ratio;
   const int most = ratio > 0 ? std::max(0, settings_.contact.mass_ratio_relax_passes) : 0;
-  std::vector<std::uint8_t> passes(n, 0);  // per component root
+  std::vector<int> passes(n, 0);  // per component root
   if (most > 0) {
     const auto responds = [&](Index i) { return bodies_[i].type == BodyType::dynamic && moves(i); };
     // Per body with a support, the sum of the normals (into it) of its contacts with them.
@@ -1139,12 +1145,12 @@ void World::build_solve_groups(std::span<Contact* const> active, std::span<const
       const Index light = light_a ? c->body_a : c->body_b;
       const Vec3& up = support_normal_[light];
       const Vec3 push = light_a ? Vec3(-c->constraint.normal) : c->constraint.normal;
-      const bool supported = has_support[light] != 0 && push.dot(up) < -0.5 * up.norm();
+      const bool supported = has_support[light] != 0 && presses_into(push, up);
       const double r = supported ? (light_a ? ia / ib : ib / ia) : 0.0;
       int k = 0;
       for (double at = 2 * ratio; k < most && r >= at; at *= 2) ++k;
-      std::uint8_t& p = passes[find_root(solve_parent_, c->body_a)];
-      p = std::max(p, static_cast<std::uint8_t>(k));
+      int& p = passes[find_root(solve_parent_, c->body_a)];
+      p = std::max(p, k);
     }
   }
   // Components numbered in the order of their first body; consecutive components with the same
@@ -1167,7 +1173,7 @@ void World::build_solve_groups(std::span<Contact* const> active, std::span<const
   };
   for (const Index i : moving) {
     const Index root = find_root(solve_parent_, i);
-    const std::size_t kind = passes[root];
+    const auto kind = static_cast<std::size_t>(passes[root]);
     if (group_of_root[root] < 0) {
       if (open[kind] < 0 || filled[kind] >= settings_.solve_group_bodies) open_group(kind);
       group_of_root[root] = static_cast<Index>(open[kind]);
@@ -1266,7 +1272,7 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
       const Vec3& up = support_normal_[light];
       // Pressed into its support: the push on it (from the other body) against its support's.
       const Vec3 push = light_a ? Vec3(-c->normal) : c->normal;
-      if (!(push.dot(up) < -0.5 * up.norm())) continue;
+      if (!presses_into(push, up)) continue;
       const auto heavier_by = [&](double r) { return r > 0 && (light_a ? ma >= r * mb : mb >= r * ma); };
       if (heavier_by(pressed_ratio)) pressed_into_support_[light] = 1;
       if (heavier_by(shock_ratio)) group.shock.emplace_back(c, light_a);
