@@ -645,8 +645,9 @@ class World {
     std::deque<Contact> made;
   };
   std::vector<SolveGroup> solve_groups_;  ///< the first solve_group_count_ are this step's
-  /// Per solver body, the sum of the normals (into it) of its contacts with bodies that do not
-  /// move in the solve (set per step for the moving bodies; shock propagation).
+  /// Per solver body, the sum of the normals (into it) of its contacts with bodies that take no
+  /// impulses (set per step for the moving bodies by build_solve_groups; the tests of a press into
+  /// the supports: shock propagation, pressed_mass_ratio, mass_ratio_relax_passes).
   std::vector<Vec3> support_normal_;
   /// Per solver body, whether a heavier dynamic body presses it into its support this step
   /// (ContactSolverSettings::pressed_mass_ratio): its contacts with the support take the softer

@@ -1115,28 +1115,26 @@ void World::build_solve_groups(std::span<Contact* const> active, std::span<const
   auto moves = [&](Index i) { return moves_in_solve(bodies_[i]); };
   for (const Contact* c : active)
     if (moves(c->body_a) && moves(c->body_b)) unite(solve_parent_, c->body_a, c->body_b);
+  // Per moving body, the sum of the normals (into it) of its contacts with its supports: bodies
+  // that take no impulses (static, asleep, kinematic). For the tests of a press into the supports,
+  // here and in solve_group.
+  const auto responds = [&](Index i) { return bodies_[i].type == BodyType::dynamic && moves(i); };
+  for (const Index i : moving) support_normal_[i].setZero();
+  for (const Contact* c : active) {
+    if (responds(c->body_a) == responds(c->body_b)) continue;
+    if (responds(c->body_b))
+      support_normal_[c->body_b] += c->constraint.normal;
+    else
+      support_normal_[c->body_a] -= c->constraint.normal;
+  }
   // Components where a dynamic body at least twice the shock ratio heavier presses a dynamic body
-  // into its support (a body the solve does not move, or a kinematic one) take extra relax passes:
-  // one, and one more each time the ratio doubles, up to
-  // ContactSolverSettings::mass_ratio_relax_passes. Components are grouped by that count, so that
-  // each is solved the same whatever components share its group.
+  // into its support take extra relax passes: one, and one more each time the ratio doubles, up
+  // to ContactSolverSettings::mass_ratio_relax_passes. Components are grouped by that count, so
+  // that each is solved the same whatever components share its group.
   const double ratio = settings_.contact.shock_mass_ratio;
   const int most = ratio > 0 ? std::max(0, settings_.contact.mass_ratio_relax_passes) : 0;
   std::vector<int> passes(n, 0);  // per component root
   if (most > 0) {
-    const auto responds = [&](Index i) { return bodies_[i].type == BodyType::dynamic && moves(i); };
-    // Per body with a support, the sum of the normals (into it) of its contacts with them.
-    std::vector<std::uint8_t> has_support(n, 0);
-    for (const Contact* c : active) {
-      if (responds(c->body_a) == responds(c->body_b)) continue;
-      const Index body = responds(c->body_a) ? c->body_a : c->body_b;
-      if (has_support[body] == 0) support_normal_[body].setZero();
-      has_support[body] = 1;
-      if (body == c->body_b)
-        support_normal_[body] += c->constraint.normal;
-      else
-        support_normal_[body] -= c->constraint.normal;
-    }
     for (const Contact* c : active) {
       if (!responds(c->body_a) || !responds(c->body_b)) continue;
       const double ia = bodies_[c->body_a].inertia.inverse_mass, ib = bodies_[c->body_b].inertia.inverse_mass;
@@ -1145,7 +1143,7 @@ void World::build_solve_groups(std::span<Contact* const> active, std::span<const
       const Index light = light_a ? c->body_a : c->body_b;
       const Vec3& up = support_normal_[light];
       const Vec3 push = light_a ? Vec3(-c->constraint.normal) : c->constraint.normal;
-      const bool supported = has_support[light] != 0 && presses_into(push, up);
+      const bool supported = presses_into(push, up);
       const double r = supported ? (light_a ? ia / ib : ib / ia) : 0.0;
       int k = 0;
       for (double at = 2 * ratio; k < most && r >= at; at *= 2) ++k;
@@ -1242,23 +1240,15 @@ void World::solve_group(SolveGroup& group, double h, double inverse_h) {
     if (const double w2 = s.angular_velocity.squaredNorm(); w2 > max_spin * max_spin)
       s.angular_velocity *= max_spin / std::sqrt(w2);
   };
-  // A light body pressed into its support by a heavier one: it meets the support with the softer
-  // spring (pressed_mass_ratio), and the heavier body stops against it (shock propagation,
-  // shock_mass_ratio).
+  // A light body pressed into its support by a heavier one (its support normal from
+  // build_solve_groups): it meets the support with the softer spring (pressed_mass_ratio), and the
+  // heavier body stops against it (shock propagation, shock_mass_ratio).
   group.shock.clear();
   group.shock_support.clear();
   for (const Index i : moving) pressed_into_support_[i] = 0;
   const double shock_ratio = settings_.contact.shock_mass_ratio;
   const double pressed_ratio = settings_.contact.pressed_mass_ratio;
   if (shock_ratio > 0 || pressed_ratio > 0) {
-    for (const Index i : moving) support_normal_[i].setZero();
-    for (ContactConstraint* c : group.constraints) {
-      if (c->a_responds == c->b_responds) continue;
-      if (c->b_responds)
-        support_normal_[c->body_b] += c->normal;
-      else
-        support_normal_[c->body_a] -= c->normal;
-    }
     // The smaller of the two ratios that are on: a pair lighter than it is neither.
     const double least = shock_ratio > 0 && pressed_ratio > 0 ? std::min(shock_ratio, pressed_ratio)
                                                               : std::max(shock_ratio, pressed_ratio);
