@@ -857,6 +857,22 @@ TEST(World, AHeavyBodyStopsAgainstALightOneOnTheGround) {
 // (off centre, turned), 10 s with sleeping off. Shock propagation stops the heavy box against the
 // light one point by point; the pushes off the friction centre turn it, and its face slid over the
 // light box's until the push carried its own friction.
+// A 10 cm box `density` times as dense as the 10 cm box under it, on the ground, in placing k of
+// four (off centre, turned). Returns the light and the heavy box.
+std::pair<BodyId, BodyId> add_heavy_on_light(World& w, double density, int k) {
+  Material heavy;
+  heavy.density *= density;
+  const Vec3 half = Vec3::Constant(0.05);
+  BodyDef light_def, heavy_def;
+  light_def.breakable = heavy_def.breakable = false;
+  light_def.rigid.position = Vec3(0, 0.05 + 1e-4, 0);
+  heavy_def.rigid.position = Vec3(0.004 * k, 0.15 + 3e-4, -0.003 * k);
+  heavy_def.rigid.orientation = Quat(Eigen::AngleAxisd(0.2 * k, Vec3::UnitY()));
+  const BodyId bottom = *w.add_body(scenes::box_model(half), light_def);
+  const BodyId top = *w.add_body(scenes::box_model(half, heavy), heavy_def);
+  return {bottom, top};
+}
+
 struct HeavyOnLight {
   int fell = 0;              // heavy boxes that fell off
   double median_drift = 0;   // how far the heavy box moved after its first second, median, m
@@ -870,16 +886,7 @@ HeavyOnLight heavy_on_light_stacks() {
     for (int k = 0; k < 4; ++k) {
       World w(scenes::settings(false));
       add_ground(w);
-      Material heavy;
-      heavy.density *= density;
-      const Vec3 half = Vec3::Constant(0.05);
-      BodyDef light_def, heavy_def;
-      light_def.breakable = heavy_def.breakable = false;
-      light_def.rigid.position = Vec3(0, 0.05 + 1e-4, 0);
-      heavy_def.rigid.position = Vec3(0.004 * k, 0.15 + 3e-4, -0.003 * k);
-      heavy_def.rigid.orientation = Quat(Eigen::AngleAxisd(0.2 * k, Vec3::UnitY()));
-      const BodyId bottom = *w.add_body(scenes::box_model(half), light_def);
-      const BodyId top = *w.add_body(scenes::box_model(half, heavy), heavy_def);
+      const auto [bottom, top] = add_heavy_on_light(w, density, k);
       for (int i = 0; i < 60; ++i) w.step();
       const Vec3 settled = w.rigid_state(top).position;
       double fastest = 0;
@@ -919,16 +926,7 @@ TEST(World, AHeavyBoxOnALightOneFallsAsleep) {
     for (int k = 0; k < 4; ++k) {
       World w(scenes::settings(true));
       add_ground(w);
-      Material heavy;
-      heavy.density *= density;
-      const Vec3 half = Vec3::Constant(0.05);
-      BodyDef light_def, heavy_def;
-      light_def.breakable = heavy_def.breakable = false;
-      light_def.rigid.position = Vec3(0, 0.05 + 1e-4, 0);
-      heavy_def.rigid.position = Vec3(0.004 * k, 0.15 + 3e-4, -0.003 * k);
-      heavy_def.rigid.orientation = Quat(Eigen::AngleAxisd(0.2 * k, Vec3::UnitY()));
-      const BodyId bottom = *w.add_body(scenes::box_model(half), light_def);
-      const BodyId top = *w.add_body(scenes::box_model(half, heavy), heavy_def);
+      const auto [bottom, top] = add_heavy_on_light(w, density, k);
       int steps = 0;
       while (steps < 240 && (w.awake(bottom) || w.awake(top))) {
         w.step();
