@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "fem_test_util.h"
+#include "shatter/core/parallel.h"
 #include "shatter/core/random.h"
 #include "shatter/fem/fem_model.h"
 #include "shatter/fem/material.h"
@@ -118,6 +119,31 @@ TEST(BlockSparseMatrix, AssembledStiffnessMatchesADenseAssembly) {
     const Eigen::MatrixXd assembled = Eigen::MatrixXd(m.matrix());
     EXPECT_LE((assembled - dense).cwiseAbs().maxCoeff(), 1e-12 * dense.cwiseAbs().maxCoeff()) << "seed " << seed;
   }
+}
+
+// Large enough that a refill goes parallel (colour by colour): the same values, bit for bit, on
+// any thread count, and the same as one thread's.
+TEST(BlockSparseMatrix, RefillGivesTheSameBitsOnAnyThreadCount) {
+  const TetMesh mesh = make_box_mesh({.max = Vec3(1, 0.6, 0.4), .cells = {16, 10, 7}, .jitter = 0.2, .seed = 9});
+  Random rng(11);
+  const FemModel model = make_fem_model(mesh, *material_preset("modelling_clay"), ModelKind::stvk);
+  std::vector<Vec3> x = mesh.positions;
+  for (Vec3& p : x) p += 0.02 * rng.uniform_vec3(-1, 1);
+  std::vector<AnchorMask> anchors(mesh.positions.size(), anchor_none);
+  for (std::size_t v = 0; v < anchors.size(); ++v)
+    if (mesh.positions[v].x() == 0.0) anchors[v] = anchor_all;
+  const int saved = num_threads();
+  std::vector<std::vector<double>> values;
+  for (int threads : {1, 2, 3}) {
+    set_num_threads(threads);
+    BlockSparseMatrix m(static_cast<Index>(x.size()), mesh.tets, anchors);
+    ASSERT_GE(m.active_tets().size(), 1024U);
+    assemble_stiffness(model, x, AssemblyOptions{}, m);
+    values.emplace_back(m.values(), m.values() + m.num_values());
+  }
+  set_num_threads(saved);
+  EXPECT_TRUE(values[0] == values[1]);
+  EXPECT_TRUE(values[0] == values[2]);
 }
 
 }  // namespace

@@ -96,15 +96,18 @@ class BlockSparseMatrix {
   void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
 
   /// Refill the values: element_matrix(tet) (a symmetric 12x12, ordering [x0;x1;x2;x3]) of every
-  /// active tet, computed in one parallel loop into a buffer, is added into its blocks in the fixed
-  /// active_tets() order; then the held components are held. Every entry is therefore summed in
-  /// the same order on any thread count, with one parallel region per refill (few barriers: many
-  /// small per-colour regions stall badly when the cores are oversubscribed).
-  /// element_matrix must be safe to call concurrently.
+  /// active tet is added into its blocks as soon as it is computed, colour by colour (the tets of
+  /// a colour side by side: they share no node); then the held components are held. Every entry
+  /// sums its tets in active_tets() order, so the bits are the same on any thread count.
+  /// element_matrix must be safe to call concurrently, and its matrices exactly symmetric (each is
+  /// read down its columns).
   template <class ElementMatrix>
   void refill(ElementMatrix&& element_matrix);
 
  private:
+  /// Active tets from which a refill goes parallel (~0.5-1 us per element matrix: about half a
+  /// millisecond of work), and the colours' tets from which each colour does.
+  static constexpr std::int64_t kMinParallelRefill = 1024;
   void add_element(Index slot, const Mat12& k);
   void finish_fill();
 
@@ -121,8 +124,7 @@ class BlockSparseMatrix {
   std::vector<Index> block_ptr_;
   std::vector<Index> block_col_;
   std::vector<Index> diagonal_block_;
-  std::vector<Index> held_diagonal_;   ///< positions in values() of held components' diagonals
-  std::vector<Mat12> element_buffer_;  ///< element matrices of the last refill (#active tets)
+  std::vector<Index> held_diagonal_;  ///< positions in values() of held components' diagonals
   Eigen::SparseMatrix<double> matrix_;
 };
 
@@ -148,15 +150,24 @@ void assemble_stiffness(const FemModel& model, const std::vector<Vec3>& x, const
 
 template <class ElementMatrix>
 void BlockSparseMatrix::refill(ElementMatrix&& element_matrix) {
-  element_buffer_.resize(active_tets_.size());
-  parallel_for(
-      0, static_cast<std::int64_t>(active_tets_.size()),
-      [&](std::int64_t s) {
-        element_buffer_[static_cast<std::size_t>(s)] = element_matrix(active_tets_[static_cast<std::size_t>(s)]);
-      },
-      1024);  // ~0.5-1 us per element matrix: parallel from about half a millisecond of work
   std::fill(values(), values() + num_values(), 0.0);
-  for (std::size_t s = 0; s < active_tets_.size(); ++s) add_element(static_cast<Index>(s), element_buffer_[s]);
+  // Each element matrix is added as soon as it is computed, while it is in the cache (through a
+  // buffer of all of them, the matrices went out to memory and back: 1.2 KB per tet). Colour by
+  // colour: the tets of one colour share no node, so they write disjoint blocks and may go side
+  // by side, and every entry still sums its tets in active_tets() order.
+  const auto n = static_cast<std::int64_t>(active_tets_.size());
+  if (num_threads() < 2 || n < kMinParallelRefill || detail::in_parallel_region()) {
+    for (std::int64_t s = 0; s < n; ++s)
+      add_element(static_cast<Index>(s), element_matrix(active_tets_[static_cast<std::size_t>(s)]));
+  } else {
+    for (Index c = 0; c < num_colors(); ++c)
+      parallel_for(
+          color_ptr_[c], color_ptr_[c + 1],
+          [&](std::int64_t s) {
+            add_element(static_cast<Index>(s), element_matrix(active_tets_[static_cast<std::size_t>(s)]));
+          },
+          kMinParallelRefill / 32);
+  }
   finish_fill();
 }
 

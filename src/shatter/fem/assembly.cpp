@@ -232,15 +232,17 @@ void BlockSparseMatrix::add_element(Index slot, const Mat12& k) {
       const Index e = entry[4 * i + j];
       if (e < 0) continue;
       const AnchorMask mj = anchors_[t[j]];
+      // k is exactly symmetric: entry (3i + r, 3j + c) is read as (3j + c, 3i + r), down a column
+      // of the column-major k.
       if ((mi | mj) == 0) {
         for (int r = 0; r < 3; ++r)
-          for (int c = 0; c < 3; ++c) v[e + r * stride + c] += k(3 * i + r, 3 * j + c);
+          for (int c = 0; c < 3; ++c) v[e + r * stride + c] += k(3 * j + c, 3 * i + r);
       } else {
         // Held components: their rows and columns are left out (identity set in finish_fill).
         for (int r = 0; r < 3; ++r) {
           if (mi & (1u << r)) continue;
           for (int c = 0; c < 3; ++c)
-            if (!(mj & (1u << c))) v[e + r * stride + c] += k(3 * i + r, 3 * j + c);
+            if (!(mj & (1u << c))) v[e + r * stride + c] += k(3 * j + c, 3 * i + r);
         }
       }
     }
