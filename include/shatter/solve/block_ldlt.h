@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -36,7 +37,20 @@ class BlockLdlt {
   [[nodiscard]] double factor_nonzeros() const { return factor_nonzeros_; }
   [[nodiscard]] double factor_flops() const { return factor_flops_; }
 
+ public:
+  /// A 3x3 block stored by columns of four (the fourth entry of each column zero): the block
+  /// products then run on whole vectors (four-wide with AVX2, two two-wide otherwise).
+  struct alignas(32) Block {
+    std::array<double, 12> v{};  ///< (r, c) at 4 c + r, r < 3
+  };
+
  private:
+  /// factorize's body, compiled for AVX2 and for the baseline (the same operations: the same bits).
+  template <bool kAvx2>
+  bool factorize_with(const BlockSparseMatrix& a);
+  bool factorize_avx2(const BlockSparseMatrix& a);
+  bool factorize_baseline(const BlockSparseMatrix& a);
+
   Index n_ = 0;                        ///< block rows (active nodes)
   std::vector<Index> old_of_;          ///< ordered index -> active node (#n)
   std::vector<Index> new_of_;          ///< active node -> ordered index (#n)
@@ -47,13 +61,13 @@ class BlockLdlt {
   std::vector<Index> parent_;          ///< elimination tree (-1: a root)
   std::vector<Index> l_ptr_;           ///< column i of L: l_ptr_[i] .. l_ptr_[i] + count
   std::vector<Index> l_row_;
-  std::vector<Mat3> l_block_;
+  std::vector<Block> l_block_;
   std::vector<Mat3> d_inverse_;  ///< D_k^-1
   bool positive_definite_ = false;
   double factor_nonzeros_ = 0;
   double factor_flops_ = 0;
   // Work space of factorize and solve.
-  std::vector<Mat3> y_;
+  std::vector<Block> y_;
   std::vector<Index> pattern_, flag_, count_;
   mutable std::vector<Vec3> z_;
 };

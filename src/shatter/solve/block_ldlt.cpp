@@ -7,37 +7,76 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 
 #include "shatter/core/assert.h"
+#include "shatter/core/lanes.h"
+#include "shatter/core/simd.h"
 
 namespace shatter {
 namespace {
 
-// The 3x3 kernels, written out: GCC at -O2 leaves Eigen's fixed-size products as calls.
-// y -= l x
-inline void subtract_product(Mat3& y, const Mat3& l, const Mat3& x) {
+using Block = BlockLdlt::Block;
+
+// The 3x3 kernels, written out (GCC at -O2 leaves Eigen's fixed-size products as calls). The
+// factorization's product runs on whole columns of Blocks, as vectors: the fourth lane computes
+// zeros, and each of the three others does exactly what the scalar formula does (no fused
+// multiply-adds: -ffp-contract=off), so AVX2's four-wide vectors and the baseline's two-wide ones
+// give the same bits. That product is nearly all of a factorization's time: 2-2.5 times faster
+// than the scalar form (237 to 1,845 block rows).
+
+// One column of a Block as a vector, and back.
+[[gnu::always_inline]] inline PlainLanes column(const Block& b, int c) {
+  PlainLanes v;
+  std::memcpy(&v, b.v.data() + 4 * c, sizeof v);
+  return v;
+}
+[[gnu::always_inline]] inline void set_column(Block& b, int c, const PlainLanes& v) {
+  std::memcpy(b.v.data() + 4 * c, &v, sizeof v);
+}
+// x's entries broadcast: xb[3 c + j] = x(j, c) in every lane.
+struct Broadcast {
+  PlainLanes xb[9];
+  [[gnu::always_inline]] explicit Broadcast(const Block& x) {
+    for (int c = 0; c < 3; ++c)
+      for (int j = 0; j < 3; ++j) xb[3 * c + j] = PlainLanes{} + x.v[4 * c + j];
+  }
+};
+// y -= l x, a column at a time: y(r, c) -= l(r, 0) x(0, c) + l(r, 1) x(1, c) + l(r, 2) x(2, c).
+[[gnu::always_inline]] inline void subtract_product(Block& y, const Block& l, const Broadcast& x) {
+  const PlainLanes l0 = column(l, 0), l1 = column(l, 1), l2 = column(l, 2);
   for (int c = 0; c < 3; ++c)
-    for (int r = 0; r < 3; ++r) y(r, c) -= l(r, 0) * x(0, c) + l(r, 1) * x(1, c) + l(r, 2) * x(2, c);
+    set_column(y, c, column(y, c) - (l0 * x.xb[3 * c] + l1 * x.xb[3 * c + 1] + l2 * x.xb[3 * c + 2]));
 }
 // x^T d (d symmetric)
-inline Mat3 transposed_product(const Mat3& x, const Mat3& d) {
-  Mat3 out;
+[[gnu::always_inline]] inline Block transposed_product(const Block& x, const Mat3& d) {
+  Block out;
   for (int c = 0; c < 3; ++c)
-    for (int r = 0; r < 3; ++r) out(r, c) = x(0, r) * d(0, c) + x(1, r) * d(1, c) + x(2, r) * d(2, c);
+    for (int r = 0; r < 3; ++r)
+      out.v[4 * c + r] = x.v[4 * r] * d(0, c) + x.v[4 * r + 1] * d(1, c) + x.v[4 * r + 2] * d(2, c);
   return out;
 }
+// Block k of block row a of `a`.
+[[gnu::always_inline]] inline Block block_of(const BlockSparseMatrix& a, Index row, Index k) {
+  Block b;
+  const Index stride = 3 * (a.block_ptr()[row + 1] - a.block_ptr()[row]);
+  const double* v = a.values() + a.block_entry(row, k, 0, 0);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) b.v[4 * c + r] = v[r * stride + c];
+  return b;
+}
 // z -= l v
-inline void subtract_product(Vec3& z, const Mat3& l, const Vec3& v) {
-  for (int r = 0; r < 3; ++r) z[r] -= l(r, 0) * v[0] + l(r, 1) * v[1] + l(r, 2) * v[2];
+inline void subtract_product(Vec3& z, const Block& l, const Vec3& v) {
+  for (int r = 0; r < 3; ++r) z[r] -= l.v[r] * v[0] + l.v[4 + r] * v[1] + l.v[8 + r] * v[2];
 }
 // z -= l^T v
-inline void subtract_transposed_product(Vec3& z, const Mat3& l, const Vec3& v) {
-  for (int r = 0; r < 3; ++r) z[r] -= l(0, r) * v[0] + l(1, r) * v[1] + l(2, r) * v[2];
+inline void subtract_transposed_product(Vec3& z, const Block& l, const Vec3& v) {
+  for (int r = 0; r < 3; ++r) z[r] -= l.v[4 * r] * v[0] + l.v[4 * r + 1] * v[1] + l.v[4 * r + 2] * v[2];
 }
 
 // The inverse of a symmetric 3x3 pivot from its cofactors; false when it is singular or not finite.
 // `positive`: its leading minors are positive (the pivot is positive definite).
-bool invert_pivot(const Mat3& d, Mat3& inverse, bool& positive) {
+[[gnu::always_inline]] inline bool invert_pivot(const Mat3& d, Mat3& inverse, bool& positive) {
   const double c00 = d(1, 1) * d(2, 2) - d(1, 2) * d(2, 1);
   const double c01 = d(1, 2) * d(2, 0) - d(1, 0) * d(2, 2);
   const double c02 = d(1, 0) * d(2, 1) - d(1, 1) * d(2, 0);
@@ -127,14 +166,15 @@ void BlockLdlt::analyze(const BlockSparseMatrix& a) {
   l_row_.resize(static_cast<std::size_t>(l_ptr_[n_]));
   l_block_.resize(static_cast<std::size_t>(l_ptr_[n_]));
   d_inverse_.resize(static_cast<std::size_t>(n_));
-  y_.assign(static_cast<std::size_t>(n_), Mat3::Zero());
+  y_.assign(static_cast<std::size_t>(n_), Block{});
   pattern_.resize(static_cast<std::size_t>(n_));
   count_.resize(static_cast<std::size_t>(n_));
   z_.resize(static_cast<std::size_t>(n_));
 }
 
-bool BlockLdlt::factorize(const BlockSparseMatrix& a) {
-  SHATTER_CHECK(a.num_active() == n_);
+// Compiled once per instruction set (kAvx2 only tells the two copies apart).
+template <bool kAvx2>
+[[gnu::always_inline]] inline bool BlockLdlt::factorize_with(const BlockSparseMatrix& a) {
   positive_definite_ = true;
   std::fill(count_.begin(), count_.end(), 0);
   std::fill(flag_.begin(), flag_.end(), -1);
@@ -145,7 +185,7 @@ bool BlockLdlt::factorize(const BlockSparseMatrix& a) {
     flag_[k] = k;
     for (Index e = upper_ptr_[k]; e < upper_ptr_[k + 1]; ++e) {
       Index i = upper_row_[e];
-      y_[i] = a.block(old_of_[i], upper_block_[e]);
+      y_[i] = block_of(a, old_of_[i], upper_block_[e]);
       Index len = 0;
       for (; flag_[i] != k; i = parent_[i]) {
         pattern_[len++] = i;
@@ -153,30 +193,42 @@ bool BlockLdlt::factorize(const BlockSparseMatrix& a) {
       }
       while (len > 0) pattern_[--top] = pattern_[--len];
     }
-    Mat3 d = a.block(old_of_[k], diagonal_block_[k]);
+    Block d = block_of(a, old_of_[k], diagonal_block_[k]);
     for (; top < n_; ++top) {
       // X_i = D_i L(k,i)^T is final here: push it into the rows below i, then L(k,i) = X_i^T D_i^-1
       // and D_k -= L(k,i) X_i.
       const Index i = pattern_[top];
-      const Mat3 x = y_[i];
-      y_[i].setZero();
+      const Block x = y_[i];
+      y_[i] = Block{};
       const Index first = l_ptr_[i];
       const Index end = first + count_[i];
-      for (Index p = first; p < end; ++p) subtract_product(y_[l_row_[p]], l_block_[p], x);
-      const Mat3 l = transposed_product(x, d_inverse_[i]);
-      subtract_product(d, l, x);
+      const Broadcast xb(x);
+      for (Index p = first; p < end; ++p) subtract_product(y_[l_row_[p]], l_block_[p], xb);
+      const Block l = transposed_product(x, d_inverse_[i]);
+      subtract_product(d, l, xb);
       l_row_[end] = k;
       l_block_[end] = l;
       ++count_[i];
     }
     // d is symmetric up to round-off; its inverse from the symmetric part keeps D^-1 symmetric.
-    const Mat3 pivot = 0.5 * (d + d.transpose());
+    Mat3 dk;
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) dk(r, c) = d.v[4 * c + r];
+    const Mat3 pivot = 0.5 * (dk + dk.transpose());
     bool positive = false;
     if (!invert_pivot(pivot, d_inverse_[k], positive)) return false;
     positive_definite_ = positive_definite_ && positive;
   }
   return true;
 }
+
+bool BlockLdlt::factorize(const BlockSparseMatrix& a) {
+  SHATTER_CHECK(a.num_active() == n_);
+  return simd_isa() == SimdIsa::avx2 ? factorize_avx2(a) : factorize_baseline(a);
+}
+
+[[gnu::target("avx2")]] bool BlockLdlt::factorize_avx2(const BlockSparseMatrix& a) { return factorize_with<true>(a); }
+bool BlockLdlt::factorize_baseline(const BlockSparseMatrix& a) { return factorize_with<false>(a); }
 
 void BlockLdlt::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) const {
   SHATTER_CHECK(b.size() == 3 * n_);
