@@ -166,7 +166,7 @@ void BlockSparseMatrix::refill(ElementMatrix&& element_matrix) {
           [&](std::int64_t s) {
             add_element(static_cast<Index>(s), element_matrix(active_tets_[static_cast<std::size_t>(s)]));
           },
-          kMinParallelRefill / 32);
+          kMinParallelRefill / 4);
   }
   finish_fill();
 }
