@@ -96,9 +96,10 @@ class BlockSparseMatrix {
   void multiply(const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
 
   /// Refill the values: element_matrix(tet) (a symmetric 12x12, ordering [x0;x1;x2;x3]) of every
-  /// active tet is added into its blocks as soon as it is computed, colour by colour (the tets of
-  /// a colour side by side: they share no node); then the held components are held. Every entry
-  /// sums its tets in active_tets() order, so the bits are the same on any thread count.
+  /// active tet is added into its blocks in active_tets() order, so every entry sums its tets in
+  /// the same order on any thread count; then the held components are held. Serially each matrix
+  /// is added as soon as it is computed; on threads colour by colour (the tets of a colour share no
+  /// node) when the colours are large, else through a buffer filled by one parallel loop.
   /// element_matrix must be safe to call concurrently, and its matrices exactly symmetric (each is
   /// read down its columns).
   template <class ElementMatrix>
@@ -106,8 +107,11 @@ class BlockSparseMatrix {
 
  private:
   /// Active tets from which a refill goes parallel (~0.5-1 us per element matrix: about half a
-  /// millisecond of work), and the colours' tets from which each colour does.
+  /// millisecond of work).
   static constexpr std::int64_t kMinParallelRefill = 1024;
+  /// Mean tets per colour from which a refill goes colour by colour: short parallel regions cost
+  /// more than they save when other programs share the cores.
+  static constexpr std::int64_t kMinParallelColour = 256;
   void add_element(Index slot, const Mat12& k);
   void finish_fill();
 
@@ -124,7 +128,8 @@ class BlockSparseMatrix {
   std::vector<Index> block_ptr_;
   std::vector<Index> block_col_;
   std::vector<Index> diagonal_block_;
-  std::vector<Index> held_diagonal_;  ///< positions in values() of held components' diagonals
+  std::vector<Index> held_diagonal_;   ///< positions in values() of held components' diagonals
+  std::vector<Mat12> element_buffer_;  ///< a refill's element matrices, when it goes through one
   Eigen::SparseMatrix<double> matrix_;
 };
 
@@ -151,22 +156,31 @@ void assemble_stiffness(const FemModel& model, const std::vector<Vec3>& x, const
 template <class ElementMatrix>
 void BlockSparseMatrix::refill(ElementMatrix&& element_matrix) {
   std::fill(values(), values() + num_values(), 0.0);
-  // Each element matrix is added as soon as it is computed, while it is in the cache (through a
-  // buffer of all of them, the matrices went out to memory and back: 1.2 KB per tet). Colour by
-  // colour: the tets of one colour share no node, so they write disjoint blocks and may go side
-  // by side, and every entry still sums its tets in active_tets() order.
   const auto n = static_cast<std::int64_t>(active_tets_.size());
+  const auto add = [&](std::int64_t s) {
+    add_element(static_cast<Index>(s), element_matrix(active_tets_[static_cast<std::size_t>(s)]));
+  };
   if (num_threads() < 2 || n < kMinParallelRefill || detail::in_parallel_region()) {
-    for (std::int64_t s = 0; s < n; ++s)
-      add_element(static_cast<Index>(s), element_matrix(active_tets_[static_cast<std::size_t>(s)]));
-  } else {
+    // Each element matrix added as soon as it is computed, while it is in the cache.
+    for (std::int64_t s = 0; s < n; ++s) add(s);
+  } else if (n >= kMinParallelColour * num_colors()) {
+    // Colour by colour, the tets of a colour side by side: they share no node, so they write
+    // disjoint blocks, and every entry still sums its tets in active_tets() order. (Through a
+    // buffer of every element matrix, 1.2 KB per tet, a whole-mesh refill went out to memory and
+    // back.)
     for (Index c = 0; c < num_colors(); ++c)
-      parallel_for(
-          color_ptr_[c], color_ptr_[c + 1],
-          [&](std::int64_t s) {
-            add_element(static_cast<Index>(s), element_matrix(active_tets_[static_cast<std::size_t>(s)]));
-          },
-          kMinParallelRefill / 4);
+      parallel_for(color_ptr_[c], color_ptr_[c + 1], [&](std::int64_t s) { add(s); }, kMinParallelColour);
+  } else {
+    // Colours too small for a parallel region each: the element matrices in one parallel loop into
+    // a buffer (a few MB, in the cache), then added in order.
+    element_buffer_.resize(active_tets_.size());
+    parallel_for(
+        0, n,
+        [&](std::int64_t s) {
+          element_buffer_[static_cast<std::size_t>(s)] = element_matrix(active_tets_[static_cast<std::size_t>(s)]);
+        },
+        kMinParallelRefill);
+    for (std::size_t s = 0; s < active_tets_.size(); ++s) add_element(static_cast<Index>(s), element_buffer_[s]);
   }
   finish_fill();
 }
