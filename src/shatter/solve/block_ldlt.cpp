@@ -56,14 +56,18 @@ struct Broadcast {
       out.v[4 * c + r] = x.v[4 * r] * d(0, c) + x.v[4 * r + 1] * d(1, c) + x.v[4 * r + 2] * d(2, c);
   return out;
 }
-// Block k of block row a of `a`.
-[[gnu::always_inline]] inline Block block_of(const BlockSparseMatrix& a, Index row, Index k) {
+// A matrix as a Block, and back.
+[[gnu::always_inline]] inline Block padded(const Mat3& m) {
   Block b;
-  const Index stride = 3 * (a.block_ptr()[row + 1] - a.block_ptr()[row]);
-  const double* v = a.values() + a.block_entry(row, k, 0, 0);
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) b.v[4 * c + r] = v[r * stride + c];
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) b.v[4 * c + r] = m(r, c);
   return b;
+}
+[[gnu::always_inline]] inline Mat3 unpadded(const Block& b) {
+  Mat3 m;
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) m(r, c) = b.v[4 * c + r];
+  return m;
 }
 // z -= l v
 inline void subtract_product(Vec3& z, const Block& l, const Vec3& v) {
@@ -185,7 +189,7 @@ template <bool kAvx2>
     flag_[k] = k;
     for (Index e = upper_ptr_[k]; e < upper_ptr_[k + 1]; ++e) {
       Index i = upper_row_[e];
-      y_[i] = block_of(a, old_of_[i], upper_block_[e]);
+      y_[i] = padded(a.block(old_of_[i], upper_block_[e]));
       Index len = 0;
       for (; flag_[i] != k; i = parent_[i]) {
         pattern_[len++] = i;
@@ -193,7 +197,7 @@ template <bool kAvx2>
       }
       while (len > 0) pattern_[--top] = pattern_[--len];
     }
-    Block d = block_of(a, old_of_[k], diagonal_block_[k]);
+    Block d = padded(a.block(old_of_[k], diagonal_block_[k]));
     for (; top < n_; ++top) {
       // X_i = D_i L(k,i)^T is final here: push it into the rows below i, then L(k,i) = X_i^T D_i^-1
       // and D_k -= L(k,i) X_i.
@@ -211,9 +215,7 @@ template <bool kAvx2>
       ++count_[i];
     }
     // d is symmetric up to round-off; its inverse from the symmetric part keeps D^-1 symmetric.
-    Mat3 dk;
-    for (int c = 0; c < 3; ++c)
-      for (int r = 0; r < 3; ++r) dk(r, c) = d.v[4 * c + r];
+    const Mat3 dk = unpadded(d);
     const Mat3 pivot = 0.5 * (dk + dk.transpose());
     bool positive = false;
     if (!invert_pivot(pivot, d_inverse_[k], positive)) return false;
