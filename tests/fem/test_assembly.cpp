@@ -1,4 +1,5 @@
-// The block pattern and the assembled stiffness against a brute-force dense assembly.
+// The block pattern and the assembled stiffness against a brute-force dense assembly, and the
+// refill's bits on several thread counts.
 #include "shatter/fem/assembly.h"
 
 #include <gtest/gtest.h>
@@ -9,7 +10,6 @@
 #include <set>
 #include <vector>
 
-#include "fem_test_util.h"
 #include "shatter/core/parallel.h"
 #include "shatter/core/random.h"
 #include "shatter/fem/fem_model.h"

@@ -853,10 +853,6 @@ TEST(World, AHeavyBodyStopsAgainstALightOneOnTheGround) {
   EXPECT_LT(deepest_crushed_piece(0), -0.02);
 }
 
-// A 10 cm box 3 to 100 times as dense as the 10 cm box under it, on the ground, in four placings
-// (off centre, turned), 10 s with sleeping off. Shock propagation stops the heavy box against the
-// light one point by point; the pushes off the friction centre turn it, and its face slid over the
-// light box's until the push carried its own friction.
 // A 10 cm box `density` times as dense as the 10 cm box under it, on the ground, in placing k of
 // four (off centre, turned). Returns the light and the heavy box.
 std::pair<BodyId, BodyId> add_heavy_on_light(World& w, double density, int k) {
@@ -873,6 +869,10 @@ std::pair<BodyId, BodyId> add_heavy_on_light(World& w, double density, int k) {
   return {bottom, top};
 }
 
+// A 10 cm box 3 to 100 times as dense as the 10 cm box under it, on the ground, in four placings
+// (off centre, turned), 10 s with sleeping off. Shock propagation stops the heavy box against the
+// light one point by point; the pushes off the friction centre turn it, and its face slid over the
+// light box's until the push carried its own friction.
 struct HeavyOnLight {
   int fell = 0;              // heavy boxes that fell off
   double median_drift = 0;   // how far the heavy box moved after its first second, median, m
