@@ -9,6 +9,7 @@
 
 #include "shatter/fem/fem_model.h"
 #include "shatter/mesh/generate.h"
+#include "shatter/solve/block_ldlt.h"
 #include "shatter/solve/dynamic_solver.h"
 #include "shatter/solve/static_solver.h"
 
@@ -89,6 +90,22 @@ void BM_BuildPattern(benchmark::State& state) {
   state.counters["free_dofs"] = m.size();
 }
 BENCHMARK(BM_BuildPattern)->Arg(4000)->Arg(40000)->Unit(benchmark::kMillisecond);
+
+// The direct solver's symbolic analysis (fill-reducing ordering, elimination tree, L's pattern) of
+// the impact's free nodes: once per new pattern, so once per impact on a new body or fragment.
+void BM_BlockLdltAnalyze(benchmark::State& state) {
+  const TetMesh mesh = slab(state.range(0));
+  const StaticProblem p = impact(mesh);
+  const BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, p.anchors);
+  BlockLdlt ldlt;
+  for (auto _ : state) {
+    ldlt.analyze(m);
+    benchmark::DoNotOptimize(ldlt.factor_nonzeros());
+  }
+  state.counters["block_rows"] = m.num_active();
+  state.counters["factor_nonzeros"] = ldlt.factor_nonzeros();
+}
+BENCHMARK(BM_BlockLdltAnalyze)->Arg(4000)->Arg(40000)->Arg(200000)->Unit(benchmark::kMillisecond);
 
 // One impact solve, two Newton iterations at most, relative residual 1e-6, StVK, glass. The
 // StaticSolver is kept across iterations (same mesh and anchors: pattern and symbolic analysis

@@ -3,7 +3,11 @@
 
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
+#include <Eigen/OrderingMethods>
+#include <Eigen/SparseCore>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -529,6 +533,34 @@ TEST(BlockLdlt, RefactorizingGivesTheBitsOfAFreshFactorization) {
   Eigen::VectorXd ax;
   second.multiply(x1, ax);
   EXPECT_LE((ax - b).norm(), 1e-12 * b.norm());
+}
+
+// The analysis hands the block pattern to the minimum-degree ordering as it stands: the ordering
+// is the one Eigen's AMDOrdering gives on the node graph built from triplets.
+TEST(BlockLdlt, OrderingIsEigensAmdOfTheNodeGraph) {
+  for (const std::array<Index, 3> cells : {std::array<Index, 3>{4, 3, 3}, {7, 5, 4}, {12, 6, 5}}) {
+    const TetMesh mesh = test::box(Vec3(1.0, 0.6, 0.4), cells, 0.2);
+    for (const bool mixed : {false, true}) {
+      const BlockSparseMatrix m(mesh.num_nodes(), mesh.tets, mixed ? mixed_anchors(mesh) : held_at_x0(mesh));
+      std::vector<Eigen::Triplet<double>> entries;
+      for (Index r = 0; r < m.num_active(); ++r)
+        for (Index k = m.block_ptr()[r]; k < m.block_ptr()[r + 1]; ++k) entries.emplace_back(r, m.block_col()[k], 1.0);
+      Eigen::SparseMatrix<double> graph(m.num_active(), m.num_active());
+      graph.setFromTriplets(entries.begin(), entries.end());
+      Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> reference;
+      Eigen::AMDOrdering<int>()(graph, reference);
+      BlockLdlt ldlt;
+      ldlt.analyze(m);
+      const std::vector<Index> expected(reference.indices().data(), reference.indices().data() + m.num_active());
+      EXPECT_EQ(ldlt.ordering(), expected)
+          << cells[0] << "x" << cells[1] << "x" << cells[2] << (mixed ? " mixed anchors" : " held at x = 0");
+      // A permutation, and not the identity (the ordering does something on these meshes).
+      std::vector<Index> sorted = ldlt.ordering();
+      std::sort(sorted.begin(), sorted.end());
+      for (Index k = 0; k < m.num_active(); ++k) ASSERT_EQ(sorted[k], k);
+      EXPECT_NE(sorted, ldlt.ordering());
+    }
+  }
 }
 
 // The factorization's block products run four-wide with AVX2 and two-wide otherwise, with the

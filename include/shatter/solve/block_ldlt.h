@@ -37,6 +37,9 @@ class BlockLdlt {
   [[nodiscard]] double factor_nonzeros() const { return factor_nonzeros_; }
   [[nodiscard]] double factor_flops() const { return factor_flops_; }
 
+  /// The fill-reducing ordering (after analyze): ordering()[k] is the active node eliminated k-th.
+  [[nodiscard]] const std::vector<Index>& ordering() const { return old_of_; }
+
  public:
   /// A 3x3 block stored by columns of four (the fourth entry of each column zero): the block
   /// products then run on whole vectors (four-wide with AVX2, two two-wide otherwise).

@@ -106,44 +106,47 @@ void BlockLdlt::analyze(const BlockSparseMatrix& a) {
   n_ = a.num_active();
   const std::vector<Index>& ptr = a.block_ptr();
   const std::vector<Index>& col = a.block_col();
-  // AMD on the node graph (Eigen's, on A + A^T of the block pattern).
-  Eigen::SparseMatrix<double> graph(n_, n_);
-  {
-    std::vector<Eigen::Triplet<double>> entries;
-    entries.reserve(static_cast<std::size_t>(a.num_blocks()));
-    for (Index r = 0; r < n_; ++r)
-      for (Index k = ptr[r]; k < ptr[r + 1]; ++k) entries.emplace_back(r, col[k], 1.0);
-    graph.setFromTriplets(entries.begin(), entries.end());
-  }
+  // AMD on the node graph: Eigen's minimum degree on the block pattern as it stands. The pattern
+  // is symmetric with sorted rows, so it is already the A + A^T that Eigen::AMDOrdering would
+  // build from triplets and two transposes: the same input, the same ordering.
+  Eigen::SparseMatrix<double, Eigen::ColMajor, int> graph(n_, n_);
+  graph.resizeNonZeros(a.num_blocks());
+  std::copy(ptr.begin(), ptr.end(), graph.outerIndexPtr());
+  std::copy(col.begin(), col.begin() + a.num_blocks(), graph.innerIndexPtr());
+  std::fill_n(graph.valuePtr(), a.num_blocks(), 1.0);
   Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> ordering;
-  Eigen::AMDOrdering<int>()(graph, ordering);  // ordering.indices()[new] = old
+  Eigen::internal::minimum_degree_ordering(graph, ordering);  // ordering.indices()[new] = old
   old_of_.assign(ordering.indices().data(), ordering.indices().data() + n_);
   new_of_.assign(static_cast<std::size_t>(n_), 0);
   for (Index k = 0; k < n_; ++k) new_of_[old_of_[k]] = k;
 
   // Column k of P A P^T above its diagonal, rows ascending: the blocks (old i, old k) with
-  // new_of(i) < k, found in block row old i (the matrix stores both triangles).
+  // new_of(i) < k, found in block row old i (the matrix stores both triangles). A counting sort
+  // by column, filled in ascending new row order.
   upper_ptr_.assign(static_cast<std::size_t>(n_) + 1, 0);
   diagonal_block_.assign(static_cast<std::size_t>(n_), -1);
-  std::vector<std::array<Index, 3>> upper;  // (column, row, block), new indices
-  upper.reserve(static_cast<std::size_t>(a.num_blocks()) / 2 + 1);
   for (Index r = 0; r < n_; ++r) {
     const Index nr = new_of_[r];
     for (Index k = ptr[r]; k < ptr[r + 1]; ++k) {
       const Index nc = new_of_[col[k]];
       if (nc == nr) diagonal_block_[nr] = k;
-      if (nr < nc) upper.push_back({nc, nr, k});
+      if (nr < nc) ++upper_ptr_[nc + 1];
     }
   }
-  std::sort(upper.begin(), upper.end());
-  upper_row_.resize(upper.size());
-  upper_block_.resize(upper.size());
-  for (std::size_t e = 0; e < upper.size(); ++e) {
-    ++upper_ptr_[upper[e][0] + 1];
-    upper_row_[e] = upper[e][1];
-    upper_block_[e] = upper[e][2];
-  }
   for (Index k = 0; k < n_; ++k) upper_ptr_[k + 1] += upper_ptr_[k];
+  upper_row_.resize(static_cast<std::size_t>(upper_ptr_[n_]));
+  upper_block_.resize(static_cast<std::size_t>(upper_ptr_[n_]));
+  std::vector<Index> next(upper_ptr_.begin(), upper_ptr_.end() - 1);
+  for (Index nr = 0; nr < n_; ++nr) {
+    const Index r = old_of_[nr];
+    for (Index k = ptr[r]; k < ptr[r + 1]; ++k) {
+      const Index nc = new_of_[col[k]];
+      if (nr < nc) {
+        upper_row_[next[nc]] = nr;
+        upper_block_[next[nc]++] = k;
+      }
+    }
+  }
 
   // Elimination tree and column counts of L (a scalar simplicial analysis, on blocks).
   parent_.assign(static_cast<std::size_t>(n_), -1);
