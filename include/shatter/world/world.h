@@ -194,13 +194,18 @@ struct ImpactRecord {
   double max_principal_stress = 0;  ///< Pa
   double max_von_mises = 0;         ///< Pa
   bool converged = false;           ///< the static solve converged
-  bool dented = false;              ///< the rest shape changed
-  Index cracks = 0;                 ///< cracks cut
-  Index fragments = 0;              ///< bodies it was replaced by (0: it goes on itself)
-  Index debris_count = 0;           ///< fragments removed as debris
-  double debris_mass = 0;           ///< kg
-  double solve_ms = 0;              ///< static solve, ms
-  double fracture_ms = 0;           ///< stresses, plasticity, cracks, children, ms
+  /// Fraction of the load the returned equilibrium carries (1 when converged; less when Newton
+  /// could not follow the whole load, docs/impacts.md "Limits"): stresses, dents and cracks come
+  /// from that equilibrium.
+  double load_fraction = 0;
+  int newton_iterations = 0;  ///< of the static solve, over all its load steps
+  bool dented = false;        ///< the rest shape changed
+  Index cracks = 0;           ///< cracks cut
+  Index fragments = 0;        ///< bodies it was replaced by (0: it goes on itself)
+  Index debris_count = 0;     ///< fragments removed as debris
+  double debris_mass = 0;     ///< kg
+  double solve_ms = 0;        ///< static solve, ms
+  double fracture_ms = 0;     ///< stresses, plasticity, cracks, children, ms
 };
 
 /// One crack (a row of StepEvents::cracks).

@@ -707,6 +707,8 @@ void collect_events(const StepEvents& ev, double time, std::vector<std::string>&
         {"max_principal_stress", e.max_principal_stress},
         {"max_von_mises", e.max_von_mises},
         {"converged", e.converged},
+        {"load_fraction", e.load_fraction},
+        {"newton_iterations", e.newton_iterations},
         {"dented", e.dented},
         {"cracks", e.cracks},
         {"fragments", e.fragments},

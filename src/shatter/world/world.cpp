@@ -1888,6 +1888,8 @@ void World::apply_impact(Index id, Index other, ImpactResult& r,
   rec.max_principal_stress = r.max_principal_stress;
   rec.max_von_mises = r.max_von_mises;
   rec.converged = r.solve.converged;
+  rec.load_fraction = r.solve.load_fraction;
+  rec.newton_iterations = r.solve.newton_iterations;
   rec.dented = r.dented;
   rec.cracks = static_cast<Index>(r.cracks.size());
   rec.debris_count = r.debris_count;
