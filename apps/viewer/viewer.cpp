@@ -316,8 +316,10 @@ void Viewer::log_events() {
   const World& w = *built_->world;
   const StepEvents& ev = w.events();
   for (const ImpactRecord& r : ev.impacts)
-    log(fmt::format("{:.3f} s  impact body {} ({:.1f} m/s, {:.3g} N): {}{}{}", w.time(), r.body.index, r.approach_speed,
-                    r.force, r.dented ? "dented " : "", r.cracks ? fmt::format("{} crack(s) ", r.cracks) : "",
+    log(fmt::format("{:.3f} s  impact body {} ({:.1f} m/s, {:.3g} N{}): {}{}{}", w.time(), r.body.index,
+                    r.approach_speed, r.force,
+                    r.converged ? "" : fmt::format(", solved to {:.0f} % of it", 100 * r.load_fraction),
+                    r.dented ? "dented " : "", r.cracks ? fmt::format("{} crack(s) ", r.cracks) : "",
                     r.fragments ? fmt::format("-> {} fragments", r.fragments) : ""));
   if (!ev.fragments.empty()) log(fmt::format("{:.3f} s  {} fragment(s) born", w.time(), ev.fragments.size()));
 }
