@@ -186,7 +186,7 @@ TEST(SceneRun, OutputsReadBackAndSurviveAStop) {
     impacts += e.at("type") == "impact";
     if (e.at("type") == "impact") {
       EXPECT_GE(e.at("newton_iterations").get<int>(), 1) << line;
-      EXPECT_GT(e.at("load_fraction").get<double>(), 0.0) << line;
+      EXPECT_GE(e.at("load_fraction").get<double>(), 0.0) << line;
       EXPECT_LE(e.at("load_fraction").get<double>(), 1.0) << line;
     }
     EXPECT_LE(e.at("time").get<double>(), run->simulated_time + 1e-12);

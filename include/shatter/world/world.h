@@ -196,7 +196,8 @@ struct ImpactRecord {
   bool converged = false;           ///< the static solve converged
   /// Fraction of the load the returned equilibrium carries (1 when converged; less when Newton
   /// could not follow the whole load, docs/impacts.md "Limits"): stresses, dents and cracks come
-  /// from that equilibrium.
+  /// from that equilibrium. 0 when not even the smallest load step converged: the body was then
+  /// analysed at its rest shape and neither dents nor cracks.
   double load_fraction = 0;
   int newton_iterations = 0;  ///< of the static solve, over all its load steps
   bool dented = false;        ///< the rest shape changed
