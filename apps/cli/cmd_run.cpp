@@ -79,17 +79,27 @@ int run(const RunArgs& args) {
   }
   const RunSummary& s = *summary;
   if (args.json) {
-    nlohmann::json j{{"scene", scene->name}, {"steps", s.steps},   {"simulated_time", s.simulated_time},
-                     {"stopped", s.stopped}, {"bodies", s.bodies}, {"fragments_born", s.fragments},
-                     {"impacts", s.impacts}, {"cracks", s.cracks}, {"state_hash", fmt::format("{:016x}", s.state_hash)},
+    nlohmann::json j{{"scene", scene->name},
+                     {"steps", s.steps},
+                     {"simulated_time", s.simulated_time},
+                     {"stopped", s.stopped},
+                     {"bodies", s.bodies},
+                     {"fragments_born", s.fragments},
+                     {"impacts", s.impacts},
+                     {"impacts_partly_solved", s.impacts_partly_solved},
+                     {"cracks", s.cracks},
+                     {"state_hash", fmt::format("{:016x}", s.state_hash)},
                      {"files", s.files}};
     std::printf("%s\n", j.dump(2).c_str());
   } else {
     std::printf("scene       %s (%s)\n", scene->name.c_str(), path.c_str());
     std::printf("simulated   %.3f s in %lld steps%s\n", s.simulated_time, static_cast<long long>(s.steps),
                 s.stopped ? " (stopped early)" : "");
-    std::printf("impacts     %d analysed, %d crack(s), %d fragment(s) born, %.3g kg of debris\n",
-                static_cast<int>(s.impacts), static_cast<int>(s.cracks), static_cast<int>(s.fragments), s.debris_mass);
+    const std::string partly =
+        s.impacts_partly_solved > 0 ? fmt::format(" ({} solved to part of the load)", s.impacts_partly_solved) : "";
+    std::printf("impacts     %d analysed%s, %d crack(s), %d fragment(s) born, %.3g kg of debris\n",
+                static_cast<int>(s.impacts), partly.c_str(), static_cast<int>(s.cracks), static_cast<int>(s.fragments),
+                s.debris_mass);
     std::printf("bodies      %d at the end\n", static_cast<int>(s.bodies));
     std::printf("time        %.0f ms wall: rigid %.0f, impacts %.0f, deformable %.0f, output %.0f\n", s.wall_ms,
                 s.rigid_ms, s.impact_ms, s.deformable_ms, s.output_ms);

@@ -280,6 +280,21 @@ TEST(SceneRun, CliInterruptLeavesCompleteFiles) {
     EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << entry.path();
 }
 
+// The clay teddy's first landing is solved to part of its load (StVK's compressive limit,
+// docs/impacts.md "Limits"), and the summary counts it.
+TEST(SceneRun, CliCountsImpactsSolvedToPartOfTheLoad) {
+  const test::CommandResult r = test::run_command(
+      test::cli_path() + " run " + scenes_dir() + "/teddy_drops.json --time 0.5 --json --no-output", false);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j.at("impacts").get<int>(), 1);
+  EXPECT_EQ(j.at("impacts_partly_solved").get<int>(), 1);
+  const test::CommandResult text =
+      test::run_command(test::cli_path() + " run " + scenes_dir() + "/teddy_drops.json --time 0.5 --no-output", false);
+  ASSERT_EQ(text.status, 0) << text.output;
+  EXPECT_NE(text.output.find("1 analysed (1 solved to part of the load)"), std::string::npos) << text.output;
+}
+
 TEST(SceneRun, CliRunsTheBundledVaseDrop) {
   test::TempDir dir;
   const test::CommandResult r =

@@ -138,6 +138,9 @@ struct RunSummary {
   Index bodies = 0;           ///< live bodies at the end (the ground not counted)
   Index fragments = 0;        ///< bodies born from fractures over the run
   Index impacts = 0;          ///< impact analyses
+  /// Impact analyses whose static solve carried only part of the load (ImpactRecord::load_fraction
+  /// below 1: a soft StVK body's large dent, docs/impacts.md "Limits")
+  Index impacts_partly_solved = 0;
   Index cracks = 0;
   double debris_mass = 0;    ///< kg
   double rigid_ms = 0;       ///< broad + narrow phase + solver, ms over the run

@@ -896,7 +896,10 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
     s.impacts += static_cast<Index>(ev.impacts.size());
     s.cracks += static_cast<Index>(ev.cracks.size());
     s.fragments += static_cast<Index>(ev.fragments.size());
-    for (const ImpactRecord& e : ev.impacts) s.debris_mass += e.debris_mass;
+    for (const ImpactRecord& e : ev.impacts) {
+      s.debris_mass += e.debris_mass;
+      if (e.load_fraction < 1.0) ++s.impacts_partly_solved;
+    }
     std::map<Index, int> child_count;
     for (const FragmentRecord& f : ev.fragments)
       names[f.body.index] = names[f.parent.index] + "." + std::to_string(++child_count[f.parent.index]);
@@ -948,6 +951,7 @@ Result<RunSummary> run_scene(const Scene& scene, const RunOptions& options) {
                          {"live_bodies", s.bodies},
                          {"fragments_born", s.fragments},
                          {"impacts", s.impacts},
+                         {"impacts_partly_solved", s.impacts_partly_solved},
                          {"cracks", s.cracks},
                          {"debris_mass", s.debris_mass},
                          {"frames", frame_count},
