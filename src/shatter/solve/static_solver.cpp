@@ -180,6 +180,10 @@ struct StaticSolver::SolveState {
   bool have_tangent = false;       ///< the matrix holds a tangent assembled in this solve
   bool tangent_projected = false;  ///< ... the projected one
   double chord_from = -1;          ///< relative residual the last chord step started from (-1: it assembled)
+  /// Residual ratios (after / before) of the load step's last assembled and last chord steps
+  /// (-1: none yet in this load step).
+  double assembled_rate = -1;
+  double chord_rate = -1;
   bool out_of_iterations = false;  ///< StaticSolverOptions::max_total_newton_iterations ran out
   double step_tolerance = 0;       ///< relative residual the current load step must reach
   StaticReport report;
@@ -376,6 +380,11 @@ StaticSolver::Outcome StaticSolver::newton_load_step(SolveState& st, double s, d
   for (int it = 0;; ++it) {
     iterations = it;
     const double rel = residual(st, s) / st.reference;
+    if (it == 0) {
+      st.assembled_rate = st.chord_rate = -1;
+    } else {
+      (st.chord_from >= 0 ? st.chord_rate : st.assembled_rate) = rel / previous_rel;
+    }
     const double rel_three_before = recent[static_cast<std::size_t>((it + 1) % 4)];
     recent[static_cast<std::size_t>(it % 4)] = rel;
     st.report.relative_residual = rel;
@@ -471,11 +480,27 @@ void StaticSolver::record_final(SolveState& st) const {
 
 StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iteration, double relative_residual,
                                                      bool projected, bool& indefinite) {
-  // A chord step near the solution: the last tangent again, while each such step cuts the
-  // residual tenfold (StaticSolverOptions::chord_tolerance).
-  const bool chord = options_.chord_tolerance > 0 && st.have_tangent && st.tangent_projected == projected &&
-                     relative_residual < options_.chord_tolerance &&
-                     (st.chord_from < 0 || relative_residual < 0.1 * st.chord_from);
+  // A chord step: the last tangent again (and with the direct solver its factorization).
+  //  - Near the solution, while each such step cuts the residual tenfold
+  //    (StaticSolverOptions::chord_tolerance).
+  //  - Where assembled steps converge only linearly (each cut the residual by less than
+  //    1 / kChordLinearRate: the projected tangent of a body compressed far), with the direct
+  //    solver, while each chord step cuts it at least as much as an assembled step does per unit of
+  //    cost: rate_chord <= rate_assembled^kChordCost.
+  const bool same_tangent = options_.chord_tolerance > 0 && st.have_tangent && st.tangent_projected == projected;
+  const bool near = relative_residual < options_.chord_tolerance &&
+                    (st.chord_from < 0 || relative_residual < 0.1 * st.chord_from);
+  //    Chord steps count as iterations: they are taken only while, at their rate (the last chord
+  //    step's in this load step; before one, the assembled rate), the load step's tolerance is
+  //    within reach of the iterations left.
+  bool linear_regime = false;
+  if (st.last_direct && st.assembled_rate > kChordLinearRate && st.assembled_rate < 1) {
+    const double pays = std::pow(st.assembled_rate, kChordCost);
+    const double rate = st.chord_rate >= 0 ? st.chord_rate : st.assembled_rate;
+    const int left = options_.max_newton_iterations - iteration - 1;
+    linear_regime = rate <= pays && std::log(st.step_tolerance / relative_residual) / std::log(rate) <= left;
+  }
+  const bool chord = same_tangent && (near || linear_regime);
   if (chord) {
     st.chord_from = relative_residual;
     ++st.report.chord_iterations;
