@@ -488,8 +488,8 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
   //    solver, while each chord step cuts it at least as much as an assembled step does per unit of
   //    cost: rate_chord <= rate_assembled^kChordCost.
   const bool same_tangent = options_.chord_tolerance > 0 && st.have_tangent && st.tangent_projected == projected;
-  const bool near = relative_residual < options_.chord_tolerance &&
-                    (st.chord_from < 0 || relative_residual < 0.1 * st.chord_from);
+  const bool near =
+      relative_residual < options_.chord_tolerance && (st.chord_from < 0 || relative_residual < 0.1 * st.chord_from);
   //    Chord steps count as iterations: they are taken only while, at their rate (the last chord
   //    step's in this load step; before one, the assembled rate), the load step's tolerance is
   //    within reach of the iterations left.
