@@ -486,13 +486,12 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
   //  - Where assembled steps converge only linearly (each cut the residual by less than
   //    1 / kChordLinearRate: the projected tangent of a body compressed far), with the direct
   //    solver, while each chord step cuts it at least as much as an assembled step does per unit of
-  //    cost: rate_chord <= rate_assembled^kChordCost.
+  //    cost (rate_chord <= rate_assembled^kChordCost) and, chord steps counting as iterations, the
+  //    load step's tolerance is within reach of the iterations left at that rate (the last chord
+  //    step's in this load step; before one, the assembled rate).
   const bool same_tangent = options_.chord_tolerance > 0 && st.have_tangent && st.tangent_projected == projected;
   const bool near =
       relative_residual < options_.chord_tolerance && (st.chord_from < 0 || relative_residual < 0.1 * st.chord_from);
-  //    Chord steps count as iterations: they are taken only while, at their rate (the last chord
-  //    step's in this load step; before one, the assembled rate), the load step's tolerance is
-  //    within reach of the iterations left.
   bool linear_regime = false;
   if (st.last_direct && st.assembled_rate > kChordLinearRate && st.assembled_rate < 1) {
     const double pays = std::pow(st.assembled_rate, kChordCost);
