@@ -4,6 +4,7 @@
 #include <numeric>
 
 #include "shatter/core/assert.h"
+#include "shatter/core/parallel.h"
 
 namespace shatter {
 
@@ -12,79 +13,140 @@ TetFaces compute_faces(const TetMesh& mesh) {
   // incident tets, which node_tets gives in increasing order: walking them, and each tet's faces
   // in local order, lists v's faces in (tet, local) order without a global sort. A stable sort of
   // that short list by the other two corners then gives the order of (key, tet, local).
+  //
+  // On several threads the nodes go in blocks (about eight per thread). Each block lists its
+  // nodes' faces into its own arrays, numbered from 0, side by side; the arrays are then joined in
+  // block order and each tet's face numbers moved by its block's offset. The faces come in node
+  // order however the nodes are blocked, so the table is the same on any thread count.
   struct Entry {
     std::int64_t key;  // the two larger corners, (b << 32) | c
     Index tet;
     int local;
   };
+  struct Block {
+    std::vector<TriIndices> faces;
+    std::vector<std::array<Index, 2>> face_tets;
+    std::vector<std::array<Index, 2>> overshared;
+  };
   const Index nt = mesh.num_tets();
+  const Index nn = mesh.num_nodes();
   const NodeTets incidence = node_tets(mesh);
   TetFaces out;
   out.tet_faces.assign(static_cast<std::size_t>(nt), {-1, -1, -1, -1});
-  // A closed mesh has 2 nt + (boundary faces) / 2 faces.
-  out.faces.reserve(2 * static_cast<std::size_t>(nt) + 64);
-  out.face_tets.reserve(2 * static_cast<std::size_t>(nt) + 64);
-  std::vector<Entry> bucket;
-  auto list = [&](Index b, Index c, Index e, int k) {
-    bucket.push_back({(static_cast<std::int64_t>(b) << 32) | static_cast<std::uint32_t>(c), e, k});
-  };
-  for (Index v = 0; v < mesh.num_nodes(); ++v) {
-    bucket.clear();
-    Index previous = -1;
-    for (const Index e : incidence.of(v)) {
-      if (e == previous) continue;  // a degenerate tet lists v twice
-      previous = e;
-      const TetIndices& t = mesh.tets[e];
-      if (t[0] == t[1] || t[0] == t[2] || t[0] == t[3] || t[1] == t[2] || t[1] == t[3] || t[2] == t[3]) {
-        // A degenerate tet (a repeated node): each face's sorted corners.
-        for (int k = 0; k < 4; ++k) {
-          std::array<Index, 3> key = {t[kTetFaces[k][0]], t[kTetFaces[k][1]], t[kTetFaces[k][2]]};
-          std::sort(key.begin(), key.end());
-          if (key[0] == v) list(key[1], key[2], e, k);
+  // Below about 16k tets (0.5 ms) the join's extra pass and waking the workers cost more than the
+  // second thread saves.
+  const int threads = nt >= 16384 && !detail::in_parallel_region() ? num_threads() : 1;
+  const Index num_blocks = threads > 1 ? std::min<Index>(8 * threads, std::max<Index>(1, nn / 256)) : 1;
+  const Index block_nodes = (nn + num_blocks - 1) / num_blocks;
+  std::vector<Block> blocks(static_cast<std::size_t>(num_blocks));
+  auto list_block = [&](std::int64_t block_index) {
+    Block& block = blocks[static_cast<std::size_t>(block_index)];
+    const Index first_node = std::min(nn, static_cast<Index>(block_index) * block_nodes);
+    const Index last_node = std::min(nn, first_node + block_nodes);
+    // About 2 faces per tet, and each tet is listed under its 4 corners: half a face per entry.
+    const auto block_tets = static_cast<std::size_t>(incidence.begin[last_node] - incidence.begin[first_node]);
+    block.faces.reserve(block_tets / 2 + 16);
+    block.face_tets.reserve(block_tets / 2 + 16);
+    std::vector<Entry> bucket;
+    auto list = [&](Index b, Index c, Index e, int k) {
+      bucket.push_back({(static_cast<std::int64_t>(b) << 32) | static_cast<std::uint32_t>(c), e, k});
+    };
+    for (Index v = first_node; v < last_node; ++v) {
+      bucket.clear();
+      Index previous = -1;
+      for (const Index e : incidence.of(v)) {
+        if (e == previous) continue;  // a degenerate tet lists v twice
+        previous = e;
+        const TetIndices& t = mesh.tets[e];
+        if (t[0] == t[1] || t[0] == t[2] || t[0] == t[3] || t[1] == t[2] || t[1] == t[3] || t[2] == t[3]) {
+          // A degenerate tet (a repeated node): each face's sorted corners.
+          for (int k = 0; k < 4; ++k) {
+            std::array<Index, 3> key = {t[kTetFaces[k][0]], t[kTetFaces[k][1]], t[kTetFaces[k][2]]};
+            std::sort(key.begin(), key.end());
+            if (key[0] == v) list(key[1], key[2], e, k);
+          }
+          continue;
         }
-        continue;
-      }
-      // v is the smallest corner of the faces through it opposite each corner k whose other two
-      // corners are above v: all three when v is the tet's smallest corner, the one opposite the
-      // only corner below v when there is one, else none. Each face is listed under one node only.
-      int below = 0, low = -1;
-      for (int i = 0; i < 4; ++i)
-        if (t[i] < v) {
-          ++below;
-          low = i;
-        }
-      if (below > 1) continue;
-      for (int k = 0; k < 4; ++k) {
-        if (t[k] == v || (below == 1 && k != low)) continue;
-        // The face's other two corners: neither k nor v's own.
-        Index b = -1, c = -1;
+        // v is the smallest corner of the faces through it opposite each corner k whose other two
+        // corners are above v: all three when v is the tet's smallest corner, the one opposite the
+        // only corner below v when there is one, else none. Each face is listed under one node only.
+        int below = 0, low = -1;
         for (int i = 0; i < 4; ++i)
-          if (i != k && t[i] != v) (b < 0 ? b : c) = t[i];
-        list(std::min(b, c), std::max(b, c), e, k);
+          if (t[i] < v) {
+            ++below;
+            low = i;
+          }
+        if (below > 1) continue;
+        for (int k = 0; k < 4; ++k) {
+          if (t[k] == v || (below == 1 && k != low)) continue;
+          // The face's other two corners: neither k nor v's own.
+          Index b = -1, c = -1;
+          for (int i = 0; i < 4; ++i)
+            if (i != k && t[i] != v) (b < 0 ? b : c) = t[i];
+          list(std::min(b, c), std::max(b, c), e, k);
+        }
+      }
+      // Insertion sort: stable, and the lists are short (a node's share of its tets' faces).
+      for (std::size_t i = 1; i < bucket.size(); ++i) {
+        const Entry x = bucket[i];
+        std::size_t j = i;
+        for (; j > 0 && bucket[j - 1].key > x.key; --j) bucket[j] = bucket[j - 1];
+        bucket[j] = x;
+      }
+      // Each (tet, local face) is listed under exactly one node, so blocks never write the same
+      // entry of tet_faces.
+      for (std::size_t i = 0; i < bucket.size();) {
+        std::size_t j = i;
+        while (j < bucket.size() && bucket[j].key == bucket[i].key) ++j;
+        const Index f = static_cast<Index>(block.faces.size());
+        const Entry& head = bucket[i];
+        const TetIndices& t = mesh.tets[head.tet];
+        block.faces.push_back({t[kTetFaces[head.local][0]], t[kTetFaces[head.local][1]], t[kTetFaces[head.local][2]]});
+        block.face_tets.push_back({head.tet, j - i > 1 ? bucket[i + 1].tet : Index(-1)});
+        for (std::size_t m = i; m < j; ++m) {
+          out.tet_faces[bucket[m].tet][bucket[m].local] = f;
+          if (m >= i + 2) block.overshared.push_back({f, bucket[m].tet});
+        }
+        i = j;
       }
     }
-    // Insertion sort: stable, and the lists are short (a node's share of its tets' faces).
-    for (std::size_t i = 1; i < bucket.size(); ++i) {
-      const Entry x = bucket[i];
-      std::size_t j = i;
-      for (; j > 0 && bucket[j - 1].key > x.key; --j) bucket[j] = bucket[j - 1];
-      bucket[j] = x;
-    }
-    for (std::size_t i = 0; i < bucket.size();) {
-      std::size_t j = i;
-      while (j < bucket.size() && bucket[j].key == bucket[i].key) ++j;
-      const Index f = static_cast<Index>(out.faces.size());
-      const Entry& first = bucket[i];
-      const TetIndices& t = mesh.tets[first.tet];
-      out.faces.push_back({t[kTetFaces[first.local][0]], t[kTetFaces[first.local][1]], t[kTetFaces[first.local][2]]});
-      out.face_tets.push_back({first.tet, j - i > 1 ? bucket[i + 1].tet : Index(-1)});
-      for (std::size_t m = i; m < j; ++m) {
-        out.tet_faces[bucket[m].tet][bucket[m].local] = f;
-        if (m >= i + 2) out.overshared.push_back({f, bucket[m].tet});
-      }
-      i = j;
-    }
+  };
+  parallel_for(0, num_blocks, [&](std::int64_t b) { list_block(b); }, 2);
+
+  // Join the blocks in order.
+  std::vector<Index> offset(static_cast<std::size_t>(num_blocks) + 1, 0);
+  for (Index b = 0; b < num_blocks; ++b)
+    offset[b + 1] = offset[b] + static_cast<Index>(blocks[static_cast<std::size_t>(b)].faces.size());
+  if (num_blocks == 1) {
+    out.faces = std::move(blocks[0].faces);
+    out.face_tets = std::move(blocks[0].face_tets);
+    out.overshared = std::move(blocks[0].overshared);
+    return out;
   }
+  out.faces.resize(static_cast<std::size_t>(offset.back()));
+  out.face_tets.resize(static_cast<std::size_t>(offset.back()));
+  parallel_for(
+      0, num_blocks,
+      [&](std::int64_t b) {
+        const Block& block = blocks[static_cast<std::size_t>(b)];
+        std::copy(block.faces.begin(), block.faces.end(), out.faces.begin() + offset[b]);
+        std::copy(block.face_tets.begin(), block.face_tets.end(), out.face_tets.begin() + offset[b]);
+      },
+      2);
+  for (Index b = 0; b < num_blocks; ++b)
+    for (const auto& [f, e] : blocks[static_cast<std::size_t>(b)].overshared)
+      out.overshared.push_back({f + offset[b], e});
+  // A tet's local face k was numbered in the block of the face's smallest corner.
+  parallel_for(
+      0, nt,
+      [&](std::int64_t e) {
+        const TetIndices& t = mesh.tets[e];
+        for (int k = 0; k < 4; ++k) {
+          const Index v = std::min({t[kTetFaces[k][0]], t[kTetFaces[k][1]], t[kTetFaces[k][2]]});
+          out.tet_faces[e][k] += offset[v / block_nodes];
+        }
+      },
+      4096);
   return out;
 }
 
