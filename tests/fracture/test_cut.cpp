@@ -216,5 +216,78 @@ TEST(Cut, RandomisedSoak) {
   EXPECT_GT(pieces_seen, 80);
 }
 
+void expect_same_faces(const TetFaces& a, const TetFaces& b, const std::string& where) {
+  EXPECT_EQ(a.faces, b.faces) << where;
+  EXPECT_EQ(a.face_tets, b.face_tets) << where;
+  EXPECT_EQ(a.tet_faces, b.tet_faces) << where;
+  EXPECT_EQ(a.overshared, b.overshared) << where;
+}
+
+// The faces carried through cuts (update_faces) and restricted to each fragment (restrict_faces)
+// are compute_faces' own, bit for bit: random planes and regions, several cuts in a row, on
+// regular and jittered meshes, with and without splitting.
+TEST(Cut, FacesCarriedThroughCutsAreComputeFaces) {
+  Random rng(7);
+  int updated = 0, restricted = 0;
+  for (int mesh_index = 0; mesh_index < 12; ++mesh_index) {
+    const Index n = 2 + mesh_index % 3;
+    TetMesh m = make_box_mesh({.min = Vec3(-1, -0.5, 0),
+                               .max = Vec3(1, 0.5, 0.7),
+                               .cells = {n + 2, n, n},
+                               .pattern = mesh_index % 2 ? BoxMeshDef::Pattern::five : BoxMeshDef::Pattern::six,
+                               .jitter = (mesh_index % 3) * 0.12,
+                               .seed = std::uint64_t(mesh_index + 1)});
+    TetFaces faces = compute_faces(m);
+    // A dent moves nodes only: every tet keeps its corners, and so its faces.
+    TetMesh dented = m;
+    for (Vec3& p : dented.positions) p *= 0.99;
+    expect_same_faces(update_faces(m, faces, dented), faces, "dent");
+    for (int step = 0; step < 12; ++step) {
+      const Vec3 point = rng.uniform_vec3(-0.6, 0.6);
+      const double radius = rng.uniform(0.2, 1.5);
+      std::vector<Index> region;
+      for (Index e = 0; e < m.num_tets(); ++e)
+        if ((m.corners(e).rowwise().mean() - point).norm() < radius) region.push_back(e);
+      const CutOptions options{.split_tets = rng.uniform() < 0.8, .snap_fraction = rng.uniform(0.0, 0.2)};
+      const CutResult r = cut_mesh(m, {.point = point, .normal = rng.unit_vec3()}, region, options);
+      // Carried over one cut, or over two at once (the faces before the previous cut).
+      const TetFaces carried = update_faces(m, faces, r.mesh);
+      expect_same_faces(carried, compute_faces(r.mesh),
+                        "mesh " + std::to_string(mesh_index) + " step " + std::to_string(step));
+      ++updated;
+      m = r.mesh;
+      faces = carried;
+    }
+    // Every component but the first, as a world keeps the children but drops debris.
+    const Components comp = connected_components(m);
+    std::vector<Index> tet_part(m.tets.size(), -1), local_tet(m.tets.size(), -1);
+    std::vector<Index> local_node(m.positions.size(), -1), part_tets;
+    std::vector<TetMesh> parts;
+    for (Index c = 1; c < comp.count; ++c) {
+      std::vector<Index> tets;
+      for (Index e = 0; e < m.num_tets(); ++e)
+        if (comp.tet_component[e] == c) tets.push_back(e);
+      std::vector<Index> node_map;
+      parts.push_back(extract_tets(m, tets, &node_map));
+      part_tets.push_back(static_cast<Index>(tets.size()));
+      for (std::size_t e = 0; e < tets.size(); ++e) {
+        tet_part[static_cast<std::size_t>(tets[e])] = c - 1;
+        local_tet[static_cast<std::size_t>(tets[e])] = static_cast<Index>(e);
+      }
+      for (std::size_t i = 0; i < node_map.size(); ++i)
+        local_node[static_cast<std::size_t>(node_map[i])] = static_cast<Index>(i);
+    }
+    const std::vector<TetFaces> split = split_faces(faces, tet_part, local_tet, local_node, part_tets);
+    ASSERT_EQ(split.size(), parts.size());
+    for (std::size_t c = 0; c < parts.size(); ++c) {
+      expect_same_faces(split[c], compute_faces(parts[c]),
+                        "mesh " + std::to_string(mesh_index) + " part " + std::to_string(c + 1));
+      ++restricted;
+    }
+  }
+  EXPECT_EQ(updated, 12 * 12);
+  EXPECT_GT(restricted, 24);
+}
+
 }  // namespace
 }  // namespace shatter

@@ -8,6 +8,7 @@
 #include "shatter/fem/material.h"
 #include "shatter/mesh/generate.h"
 #include "shatter/mesh/mass_properties.h"
+#include "shatter/mesh/topology.h"
 #include "shatter/rigid/body.h"
 #include "shatter/rigid/impact.h"
 #include "shatter/rigid/integrate.h"
@@ -193,6 +194,11 @@ TEST(ImpactAnalysis, FragmentsKeepMassMomentumAndFollowEq22) {
     add_momentum(children, m.mass, c.rigid);
     EXPECT_LT(m.mass.center.norm(), 1e-12);  // body frame on the child's centre of mass
     EXPECT_EQ(m.fem.material.youngs_modulus, bar.fem.material.youngs_modulus);
+    // The face table carried from the parent's is the one compute_faces gives.
+    const TetFaces faces = compute_faces(m.mesh);
+    EXPECT_EQ(m.faces.faces, faces.faces);
+    EXPECT_EQ(m.faces.face_tets, faces.face_tets);
+    EXPECT_EQ(m.faces.tet_faces, faces.tet_faces);
     // Eq. 22.
     const RigidState& p = state.rigid;
     EXPECT_LT((c.rigid.angular_velocity - p.angular_velocity).norm(), 1e-15);
@@ -268,6 +274,10 @@ TEST(ImpactAnalysis, DebrisRulesKeepTheHeaviest) {
     total += c.model->mass.mass;
   }
   EXPECT_NEAR(one->children[0].model->mass.mass, heaviest, 1e-12 * total);
+  // The kept child's face table, split from the cut mesh's with the debris left out.
+  const BodyModel& kept = *one->children[0].model;
+  EXPECT_EQ(kept.faces.faces, compute_faces(kept.mesh).faces);
+  EXPECT_EQ(kept.faces.tet_faces, compute_faces(kept.mesh).tet_faces);
   EXPECT_EQ(one->debris_count, static_cast<Index>(all->children.size()) - 1);
   EXPECT_NEAR(one->debris_mass + heaviest, total, 1e-12 * total);
 }

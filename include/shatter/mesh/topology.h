@@ -44,6 +44,24 @@ struct TetFaces {
 /// Requires every tet node index in [0, num_nodes) (validate_mesh checks that first).
 TetFaces compute_faces(const TetMesh& mesh);
 
+/// The faces of `after` (what compute_faces(after) gives, the same bits) from those of `before`, a
+/// mesh it shares most tets with: a tet of `after` whose index is below before's tet count and
+/// whose corners are the same node indices as before's tet of that index keeps its faces, and only
+/// the faces of the other tets, and of their neighbours across them, are searched again. For a mesh
+/// cut (cut_mesh keeps the indices of the input's nodes and tets; changed tets and new ones differ)
+/// or dented: O(faces) instead of compute_faces' incidence and per-node sorts. Falls back to
+/// compute_faces when `before_faces` has faces of more than two tets or the result would.
+TetFaces update_faces(const TetMesh& before, const TetFaces& before_faces, const TetMesh& after);
+
+/// The faces of the parts of a mesh that share no face (its connected components, say), from
+/// `faces` = compute_faces(mesh): for each part, what compute_faces gives for
+/// extract_tets(mesh, its tets in increasing order). `tet_part` (#tets): each tet's part, -1 for a
+/// tet in none; `local_tet` (#tets): its index in its part; `local_node` (#nodes): each node's
+/// index in the part of its tets; `part_tets`: the tets of each part. One pass over the faces.
+std::vector<TetFaces> split_faces(const TetFaces& faces, std::span<const Index> tet_part,
+                                  std::span<const Index> local_tet, std::span<const Index> local_node,
+                                  std::span<const Index> part_tets);
+
 /// A triangle surface: positions indexed by triangles.
 struct TriSurface {
   std::vector<Vec3> positions;        ///< vertex positions, m (#vertices)

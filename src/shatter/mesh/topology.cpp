@@ -150,6 +150,166 @@ TetFaces compute_faces(const TetMesh& mesh) {
   return out;
 }
 
+namespace {
+
+// A face's corners sorted, as compute_faces orders the faces: the smallest, then the other two.
+struct FaceKey {
+  Index v = 0;
+  std::int64_t rest = 0;  // (b << 32) | c, b <= c
+  friend bool operator==(const FaceKey&, const FaceKey&) = default;
+  friend bool operator<(const FaceKey& x, const FaceKey& y) { return x.v != y.v ? x.v < y.v : x.rest < y.rest; }
+};
+
+FaceKey face_key(Index a, Index b, Index c) {
+  if (a > b) std::swap(a, b);
+  if (b > c) std::swap(b, c);
+  if (a > b) std::swap(a, b);
+  return {a, (static_cast<std::int64_t>(b) << 32) | static_cast<std::uint32_t>(c)};
+}
+
+FaceKey face_key(const TetIndices& t, int k) {
+  return face_key(t[kTetFaces[k][0]], t[kTetFaces[k][1]], t[kTetFaces[k][2]]);
+}
+
+}  // namespace
+
+TetFaces update_faces(const TetMesh& before, const TetFaces& before_faces, const TetMesh& after) {
+  const Index nb = before.num_tets();
+  const Index na = after.num_tets();
+  const Index nf = before_faces.num_faces();
+  if (!before_faces.overshared.empty() || static_cast<Index>(before_faces.tet_faces.size()) != nb)
+    return compute_faces(after);
+  // Tets of `after` with before's corners at the same index keep their faces.
+  std::vector<char> same(static_cast<std::size_t>(na), 0);
+  for (Index e = 0; e < std::min(na, nb); ++e) same[e] = after.tets[e] == before.tets[e];
+  const auto kept = [&](Index e) { return e >= 0 && e < na && same[e] != 0; };
+
+  // The faces to search again: every face of a changed or new tet, and the faces of kept tets
+  // whose neighbour in `before` changed. In (key, tet, local) order, as compute_faces lists them.
+  struct Entry {
+    FaceKey key;
+    Index tet;
+    int local;
+  };
+  std::vector<Entry> searched;
+  for (Index e = 0; e < na; ++e)
+    if (!same[e])
+      for (int k = 0; k < 4; ++k) searched.push_back({face_key(after.tets[e], k), e, k});
+  // A face of before between a kept tet and a changed one: the kept tet's side is searched. (By
+  // face, in order: a pass over the tets' neighbours would read the face table at random.)
+  std::vector<char> kept_face(static_cast<std::size_t>(nf), 0);  // both tets (or its only one) kept
+  for (Index f = 0; f < nf; ++f) {
+    const auto& ft = before_faces.face_tets[f];
+    const bool kept0 = kept(ft[0]);
+    const bool kept1 = ft[1] < 0 ? kept0 : kept(ft[1]);
+    kept_face[f] = kept0 && kept1;
+    if (kept0 == kept1) continue;
+    const Index e = kept0 ? ft[0] : ft[1];
+    int k = 0;
+    while (k < 4 && before_faces.tet_faces[e][k] != f) ++k;
+    if (k == 4) return compute_faces(after);  // not reached for a valid before_faces
+    searched.push_back({face_key(after.tets[e], k), e, k});
+  }
+  std::sort(searched.begin(), searched.end(), [](const Entry& x, const Entry& y) {
+    if (!(x.key == y.key)) return x.key < y.key;
+    return x.tet != y.tet ? x.tet < y.tet : x.local < y.local;
+  });
+
+  // Merge the kept faces (both tets kept, in before's order) with the searched ones by key.
+  TetFaces out;
+  out.tet_faces.assign(static_cast<std::size_t>(na), {-1, -1, -1, -1});
+  out.faces.reserve(static_cast<std::size_t>(nf) + searched.size() / 2 + 16);
+  out.face_tets.reserve(out.faces.capacity());
+  std::vector<Index> new_of_old(static_cast<std::size_t>(nf), -1);
+  Index f = 0;
+  std::size_t d = 0;
+  while (true) {
+    while (f < nf && !kept_face[f]) ++f;
+    if (f == nf && d == searched.size()) break;
+    bool take_kept = d == searched.size();
+    if (f < nf && !take_kept) {
+      const TriIndices& c = before_faces.faces[f];
+      const FaceKey key = face_key(c[0], c[1], c[2]);
+      // A kept face that a changed tet also has: more than two tets on it.
+      if (key == searched[d].key) return compute_faces(after);
+      take_kept = key < searched[d].key;
+    }
+    const Index i = out.num_faces();
+    if (take_kept) {
+      out.faces.push_back(before_faces.faces[f]);
+      out.face_tets.push_back(before_faces.face_tets[f]);
+      new_of_old[f] = i;
+      ++f;
+      continue;
+    }
+    std::size_t j = d;
+    while (j < searched.size() && searched[j].key == searched[d].key) ++j;
+    const Entry& head = searched[d];
+    const TetIndices& t = after.tets[head.tet];
+    out.faces.push_back({t[kTetFaces[head.local][0]], t[kTetFaces[head.local][1]], t[kTetFaces[head.local][2]]});
+    out.face_tets.push_back({head.tet, j - d > 1 ? searched[d + 1].tet : Index(-1)});
+    for (std::size_t m = d; m < j; ++m) {
+      out.tet_faces[searched[m].tet][searched[m].local] = i;
+      if (m >= d + 2) out.overshared.push_back({i, searched[m].tet});
+    }
+    d = j;
+  }
+  for (Index e = 0; e < na; ++e) {
+    if (!same[e]) continue;
+    for (int k = 0; k < 4; ++k) {
+      if (out.tet_faces[e][k] >= 0) continue;
+      out.tet_faces[e][k] = new_of_old[before_faces.tet_faces[e][k]];
+      if (out.tet_faces[e][k] < 0) return compute_faces(after);  // not reached for a valid before_faces
+    }
+  }
+  return out;
+}
+
+std::vector<TetFaces> split_faces(const TetFaces& faces, std::span<const Index> tet_part,
+                                  std::span<const Index> local_tet, std::span<const Index> local_node,
+                                  std::span<const Index> part_tets) {
+  SHATTER_CHECK(tet_part.size() == faces.tet_faces.size() && local_tet.size() == tet_part.size());
+  std::vector<TetFaces> out(part_tets.size());
+  std::vector<std::size_t> part_faces(part_tets.size(), 0);
+  for (const auto& ft : faces.face_tets) {
+    const Index p = tet_part[static_cast<std::size_t>(ft[0])];
+    if (p >= 0) ++part_faces[static_cast<std::size_t>(p)];
+  }
+  for (std::size_t p = 0; p < out.size(); ++p) {
+    out[p].tet_faces.resize(static_cast<std::size_t>(part_tets[p]));
+    out[p].faces.reserve(part_faces[p]);
+    out[p].face_tets.reserve(part_faces[p]);
+  }
+  // Each face's index in its part, in the order of `faces` (the order compute_faces gives a part:
+  // its node and tet numbers keep their order).
+  std::vector<Index> local_face(static_cast<std::size_t>(faces.num_faces()), -1);
+  for (Index f = 0; f < faces.num_faces(); ++f) {
+    const auto& ft = faces.face_tets[f];
+    const Index p = tet_part[static_cast<std::size_t>(ft[0])];
+    if (p < 0) continue;
+    SHATTER_CHECK(ft[1] < 0 || tet_part[static_cast<std::size_t>(ft[1])] == p);  // parts share no face
+    TetFaces& part = out[static_cast<std::size_t>(p)];
+    local_face[f] = part.num_faces();
+    const TriIndices& c = faces.faces[f];
+    part.faces.push_back({local_node[static_cast<std::size_t>(c[0])], local_node[static_cast<std::size_t>(c[1])],
+                          local_node[static_cast<std::size_t>(c[2])]});
+    part.face_tets.push_back({local_tet[static_cast<std::size_t>(ft[0])],
+                              ft[1] < 0 ? Index(-1) : local_tet[static_cast<std::size_t>(ft[1])]});
+  }
+  for (std::size_t e = 0; e < tet_part.size(); ++e) {
+    const Index p = tet_part[e];
+    if (p < 0) continue;
+    auto& tf = out[static_cast<std::size_t>(p)].tet_faces[static_cast<std::size_t>(local_tet[e])];
+    for (int k = 0; k < 4; ++k) tf[k] = local_face[faces.tet_faces[e][k]];
+  }
+  for (const auto& [f, e] : faces.overshared) {
+    const Index p = tet_part[static_cast<std::size_t>(e)];
+    if (p >= 0 && local_face[f] >= 0)
+      out[static_cast<std::size_t>(p)].overshared.push_back({local_face[f], local_tet[static_cast<std::size_t>(e)]});
+  }
+  return out;
+}
+
 TriSurface boundary_surface(const TetMesh& mesh, const TetFaces& faces) {
   TriSurface s;
   std::vector<Index> vertex_of_node(mesh.positions.size(), -1);

@@ -284,6 +284,26 @@ void make_children(const BodyModel& model, const RigidState& rigid, const Fractu
   std::vector<std::size_t> kept_fragments;
   for (std::size_t k = 0; k < fr.fragments.size(); ++k)
     if (keep[k]) kept_fragments.push_back(k);
+  // The children's face tables: the cut mesh's from the parent's (only what the cuts changed is
+  // searched), split among the kept children in one pass.
+  std::vector<TetFaces> child_faces;
+  {
+    const std::size_t cut_tets = fr.mesh.tets.size();
+    std::vector<Index> tet_part(cut_tets, -1), local_tet(cut_tets, -1), local_node(fr.mesh.positions.size(), -1);
+    std::vector<Index> part_tets;
+    for (std::size_t i = 0; i < kept_fragments.size(); ++i) {
+      const Fragment& f = fr.fragments[kept_fragments[i]];
+      part_tets.push_back(static_cast<Index>(f.tet_map.size()));
+      for (std::size_t e = 0; e < f.tet_map.size(); ++e) {
+        tet_part[static_cast<std::size_t>(f.tet_map[e])] = static_cast<Index>(i);
+        local_tet[static_cast<std::size_t>(f.tet_map[e])] = static_cast<Index>(e);
+      }
+      for (std::size_t v = 0; v < f.node_map.size(); ++v)
+        local_node[static_cast<std::size_t>(f.node_map[v])] = static_cast<Index>(v);
+    }
+    child_faces =
+        split_faces(update_faces(model.mesh, model.faces, fr.mesh), tet_part, local_tet, local_node, part_tets);
+  }
   // Each child's model (faces, surface, FEM rest data, mass properties, crack flags) depends only
   // on its fragment and the parent: built side by side, each into its own slot, in fragment order.
   std::vector<ImpactChild> children(kept_fragments.size());
@@ -296,7 +316,7 @@ void make_children(const BodyModel& model, const RigidState& rigid, const Fractu
         auto m = std::make_shared<BodyModel>();
         m->mesh = f.mesh;
         for (Vec3& p : m->mesh.positions) p -= c;
-        m->faces = compute_faces(m->mesh);
+        m->faces = std::move(child_faces[static_cast<std::size_t>(i)]);
         m->surface = boundary_surface(m->mesh, m->faces);
         // Tets the cut and plasticity left as they were keep the parent's rest data.
         std::vector<Index> same_rest(f.tet_map.size());
