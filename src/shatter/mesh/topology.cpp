@@ -8,6 +8,28 @@
 
 namespace shatter {
 
+namespace {
+
+// One face from the run of list entries (each with .tet and .local) that share it, in (tet, local)
+// order: its corners as the run's first tet sees them, its first two tets, any further ones as
+// overshared; each entry's slot of tet_faces gets the face's number (faces' size before).
+template <class Entry>
+void add_face(const TetMesh& mesh, std::span<const Entry> run, std::vector<TriIndices>& faces,
+              std::vector<std::array<Index, 2>>& face_tets, std::vector<std::array<Index, 4>>& tet_faces,
+              std::vector<std::array<Index, 2>>& overshared) {
+  const Index f = static_cast<Index>(faces.size());
+  const TetIndices& t = mesh.tets[run[0].tet];
+  const auto& corners = kTetFaces[run[0].local];
+  faces.push_back({t[corners[0]], t[corners[1]], t[corners[2]]});
+  face_tets.push_back({run[0].tet, run.size() > 1 ? run[1].tet : Index(-1)});
+  for (std::size_t m = 0; m < run.size(); ++m) {
+    tet_faces[run[m].tet][run[m].local] = f;
+    if (m >= 2) overshared.push_back({f, run[m].tet});
+  }
+}
+
+}  // namespace
+
 TetFaces compute_faces(const TetMesh& mesh) {
   // Each face is listed under its smallest corner v. The tets with a face there are among v's
   // incident tets, which node_tets gives in increasing order: walking them, and each tet's faces
@@ -98,15 +120,8 @@ TetFaces compute_faces(const TetMesh& mesh) {
       for (std::size_t i = 0; i < bucket.size();) {
         std::size_t j = i;
         while (j < bucket.size() && bucket[j].key == bucket[i].key) ++j;
-        const Index f = static_cast<Index>(block.faces.size());
-        const Entry& head = bucket[i];
-        const TetIndices& t = mesh.tets[head.tet];
-        block.faces.push_back({t[kTetFaces[head.local][0]], t[kTetFaces[head.local][1]], t[kTetFaces[head.local][2]]});
-        block.face_tets.push_back({head.tet, j - i > 1 ? bucket[i + 1].tet : Index(-1)});
-        for (std::size_t m = i; m < j; ++m) {
-          out.tet_faces[bucket[m].tet][bucket[m].local] = f;
-          if (m >= i + 2) block.overshared.push_back({f, bucket[m].tet});
-        }
+        add_face(mesh, std::span<const Entry>(bucket).subspan(i, j - i), block.faces, block.face_tets, out.tet_faces,
+                 block.overshared);
         i = j;
       }
     }
@@ -182,7 +197,7 @@ TetFaces update_faces(const TetMesh& before, const TetFaces& before_faces, const
   // Tets of `after` with before's corners at the same index keep their faces.
   std::vector<char> same(static_cast<std::size_t>(na), 0);
   for (Index e = 0; e < std::min(na, nb); ++e) same[e] = after.tets[e] == before.tets[e];
-  const auto kept = [&](Index e) { return e >= 0 && e < na && same[e] != 0; };
+  const auto kept = [&](Index e) { return e < na && same[e] != 0; };
 
   // The faces to search again: every face of a changed or new tet, and the faces of kept tets
   // whose neighbour in `before` changed. In (key, tet, local) order, as compute_faces lists them.
@@ -234,24 +249,17 @@ TetFaces update_faces(const TetMesh& before, const TetFaces& before_faces, const
       if (key == searched[d].key) return compute_faces(after);
       take_kept = key < searched[d].key;
     }
-    const Index i = out.num_faces();
     if (take_kept) {
+      new_of_old[f] = out.num_faces();
       out.faces.push_back(before_faces.faces[f]);
       out.face_tets.push_back(before_faces.face_tets[f]);
-      new_of_old[f] = i;
       ++f;
       continue;
     }
     std::size_t j = d;
     while (j < searched.size() && searched[j].key == searched[d].key) ++j;
-    const Entry& head = searched[d];
-    const TetIndices& t = after.tets[head.tet];
-    out.faces.push_back({t[kTetFaces[head.local][0]], t[kTetFaces[head.local][1]], t[kTetFaces[head.local][2]]});
-    out.face_tets.push_back({head.tet, j - d > 1 ? searched[d + 1].tet : Index(-1)});
-    for (std::size_t m = d; m < j; ++m) {
-      out.tet_faces[searched[m].tet][searched[m].local] = i;
-      if (m >= d + 2) out.overshared.push_back({i, searched[m].tet});
-    }
+    add_face(after, std::span<const Entry>(searched).subspan(d, j - d), out.faces, out.face_tets, out.tet_faces,
+             out.overshared);
     d = j;
   }
   for (Index e = 0; e < na; ++e) {
