@@ -467,6 +467,80 @@ TEST(StaticSolver, HopelessLoadStepsAreGivenUpEarly) {
   EXPECT_LE(difference, 1e-4 * tip);
 }
 
+// A StVK bar (nu = 0) pushed end-on carries at most E / (3 sqrt 3) of compressive stress: its first
+// Piola stress E lambda (lambda^2 - 1) / 2 is least at the stretch lambda = 1 / sqrt 3. Pushed with
+// 0.4 E, it has no equilibrium past the load fraction 0.481. limit_resolution ends the search for it
+// once it is bracketed to 1/8, in fewer iterations, and never past the limit; where an equilibrium
+// exists at the full load (the cantilever bent far, which needs smaller load steps) it still reaches
+// the full load, at the same equilibrium.
+TEST(StaticSolver, LimitResolutionBracketsALimitLoadAndStillReachesTheFullLoad) {
+  const double E = 1e6, L = 0.1;
+  const TetMesh mesh = test::box(Vec3(L, L, L), {2, 2, 2});
+  const FemModel model = make_fem_model(mesh, test::test_material(E, 0.0), ModelKind::stvk);
+  StaticProblem problem;
+  problem.anchors.assign(mesh.positions.size(), anchor_none);
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v)
+    if (mesh.positions[v].x() == 0.0) problem.anchors[v] = anchor_all;
+  problem.external_forces = test::face_load(mesh, [&](const Vec3& p) { return p.x() == L; }, Vec3(-0.4 * E, 0, 0));
+  const double limit = 1.0 / (3.0 * std::sqrt(3.0)) / 0.4;
+  StaticReport reports[2];
+  for (const int bracket : {0, 1}) {
+    StaticSolverOptions options;
+    options.tangent = TangentKind::projected;
+    options.max_newton_iterations = 12;
+    options.abandon_slow_load_steps = true;
+    options.limit_resolution = bracket ? 0.125 : 0.0;
+    std::vector<Vec3> x = mesh.positions;
+    const Result<StaticReport> r = solve_static(model, problem, x, options);
+    ASSERT_OK(r);
+    EXPECT_FALSE(r->converged);
+    EXPECT_LE(r->load_fraction, limit) << "bracket " << bracket;
+    for (const Vec3& p : x) ASSERT_TRUE(p.allFinite());
+    // The bar in equilibrium at the fraction reached: shortened, not inverted.
+    for (std::size_t v = 0; v < x.size(); ++v)
+      if (mesh.positions[v].x() == L) {
+        EXPECT_LT(x[v].x(), L);
+        EXPECT_GT(x[v].x(), 0.0);
+      }
+    reports[bracket] = *r;
+  }
+  std::printf("StVK bar past its limit (%.3f of the load): %.3f in %d Newton iterations, %.3f in %d bracketed\n", limit,
+              reports[0].load_fraction, reports[0].newton_iterations, reports[1].load_fraction,
+              reports[1].newton_iterations);
+  EXPECT_GE(reports[1].load_fraction, limit - 0.125 - 0.0625);
+  EXPECT_LT(reports[1].newton_iterations, reports[0].newton_iterations);
+  EXPECT_NE(reports[1].message.find("bracketed"), std::string::npos) << reports[1].message;
+
+  const SoftCantilever c;
+  std::vector<Vec3> solutions[2];
+  for (const int bracket : {0, 1}) {
+    StaticSolverOptions options;
+    options.tangent = TangentKind::projected;
+    options.relative_residual_tolerance = 1e-6;
+    options.max_newton_iterations = 20;
+    options.abandon_slow_load_steps = true;
+    options.limit_resolution = bracket ? 0.125 : 0.0;
+    solutions[bracket] = c.mesh.positions;
+    const Result<StaticReport> r = solve_static(c.model, c.problem, solutions[bracket], options);
+    ASSERT_OK(r);
+    // Bracketed, a full-load step that fails only on the final tolerance ends the solve there.
+    if (bracket) {
+      EXPECT_EQ(r->load_fraction, 1.0) << r->message;
+      EXPECT_LE(r->relative_residual, options.intermediate_tolerance);
+    } else {
+      ASSERT_TRUE(r->converged) << r->message;
+    }
+    EXPECT_GT(r->load_step_failures, 0);  // the full step failed: the bracket was in play
+  }
+  double tip = 0, difference = 0;
+  for (std::size_t v = 0; v < c.mesh.positions.size(); ++v) {
+    tip = std::max(tip, (solutions[0][v] - c.mesh.positions[v]).norm());
+    difference = std::max(difference, (solutions[1][v] - solutions[0][v]).norm());
+  }
+  std::printf("soft cantilever: bracketed solution within %.3g of the tip deflection\n", difference / tip);
+  EXPECT_LE(difference, 1e-4 * tip);
+}
+
 TEST(StaticSolver, LinearModelSolvesInOneIteration) {
   // A linear problem is one linear solve, whichever linear solver, down to the default tolerance.
   const SoftCantilever soft;

@@ -116,6 +116,19 @@ struct StaticSolverOptions {
   /// default; impact solves use it: their hard steps (a clay body crushed past what StVK carries)
   /// otherwise spent their whole 12 iterations before failing.
   bool abandon_slow_load_steps = false;
+  /// Bracketing of the largest load in equilibrium, as a fraction of the full load (0: off). Once
+  /// a load step has failed, its fraction bounds the search from above: a later step reaches it
+  /// again only when that step is at most a quarter of the one that failed there (a retry from
+  /// much closer; otherwise the step stops three quarters of the way), and the solve ends at the
+  /// fraction reached, reported as not converged as when the halvings run out, rather than take a
+  /// step smaller than this that stays below a failed fraction. A body past its limit load (a clay
+  /// body crushed past what StVK carries) then spends no iterations closing in on that limit
+  /// beyond this resolution, while a body that only needs smaller steps still reaches the full
+  /// load. A failed step whose residual fell under intermediate_tolerance failed on the
+  /// tolerance, not for want of an equilibrium, and bounds nothing; at the full load it ends the
+  /// solve there, not converged, instead of being retried from below. Impact solves use 1/8
+  /// (docs/solver.md, "Bracketing a limit load").
+  double limit_resolution = 0;
   /// Load steps before the last need only this relative residual: they only give the next step
   /// its start, and Newton's quadratic convergence at the last step makes up for it in one or two
   /// iterations. Never tighter than relative_residual_tolerance.

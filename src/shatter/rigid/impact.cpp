@@ -501,6 +501,7 @@ StaticSolverOptions default_impact_solver_options() {
   // far under the load took 174 iterations in as many as 14 load steps).
   o.max_total_newton_iterations = 60;
   o.abandon_slow_load_steps = true;
+  o.limit_resolution = 0.125;
   // Near the solution a step reuses the last tangent and its factorization: an impact's second
   // Newton step then costs a triangular solve instead of a refill (and a factorization).
   o.chord_tolerance = 1e-2;

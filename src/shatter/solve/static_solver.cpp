@@ -242,10 +242,31 @@ Result<StaticReport> StaticSolver::solve(const FemModel& model, const StaticProb
   int halvings = 0;
   std::vector<Vec3> x_good = x;
   Outcome failure;
+  Outcome last_failure;  // the last failed load step's (limit_resolution)
   const double final_tolerance = options_.relative_residual_tolerance;
   const double intermediate_tolerance = std::max(options_.intermediate_tolerance, final_tolerance);
+  // The lowest fraction whose load step failed, and the size of that step (limit_resolution).
+  double lowest_failed = std::numeric_limits<double>::infinity();
+  double failed_step = 0;
+  const bool bracket = options_.limit_resolution > 0;
+  bool bounded = false;  // the last failed step bounds the search (limit_resolution)
   while (done < 1.0) {
-    const double target = std::min(1.0, done + step);
+    double target = std::min(1.0, done + step);
+    // Toward a failed fraction (limit_resolution): three quarters of the way, unless the step is a
+    // retry from much closer. Near a limit point a step that lands close below it converges (in
+    // more iterations), and it leaves less of the gap for later steps: the clay teddy's landing
+    // reaches the fraction that bisection reaches (0.4375) in 24 Newton iterations instead of 33.
+    if (bracket && target >= lowest_failed && target - done > 0.25 * failed_step)
+      target = done + 0.75 * (lowest_failed - done);
+    // A step smaller than the resolution that stays below a failed fraction is not worth its
+    // iterations (once the last failed step bounds the search): the solve ends at the fraction
+    // reached.
+    if (bounded && target < lowest_failed && target - done < options_.limit_resolution) {
+      failure = {last_failure.status, "the load in equilibrium is bracketed below " + format_number(lowest_failed, 3) +
+                                          " (limit resolution " + format_number(options_.limit_resolution, 3) +
+                                          "); the last failed step: " + last_failure.message};
+      break;
+    }
     // Snap to the full load when the summed steps fall short of it only by round-off.
     const double s = target >= 1.0 - 1e-12 ? 1.0 : target;
     int iterations = 0;
@@ -258,11 +279,28 @@ Result<StaticReport> StaticSolver::solve(const FemModel& model, const StaticProb
       if (iterations > kHardLoadStep) step *= 0.75;
       continue;
     }
+    // The full load's step failed only on the final tolerance, its residual under the intermediate
+    // one (limit_resolution): its state is a better equilibrium than any fraction below it. The
+    // solve ends there, not converged (a StVK teddy's rebound: 10 iterations to 3e-4, where the
+    // retries from below took 47 and ended at 0.875 of the load).
+    if (bracket && s == 1.0 && st.report.relative_residual <= intermediate_tolerance) {
+      done = s;
+      failure = std::move(why);
+      break;
+    }
     x = x_good;
+    // A step that brought its residual under the intermediate tolerance failed on the (tighter)
+    // tolerance, not for want of an equilibrium: it bounds nothing, and the steps go on.
+    bounded = bracket && !(st.report.relative_residual <= intermediate_tolerance);
+    if (bounded && s <= lowest_failed) {
+      lowest_failed = s;
+      failed_step = s - done;
+    }
     if (halvings >= options_.max_load_halvings || st.out_of_iterations) {
       failure = std::move(why);
       break;
     }
+    last_failure = why;
     ++halvings;
     ++st.report.load_step_failures;
     step = 0.5 * (s - done);
