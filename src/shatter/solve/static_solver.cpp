@@ -279,19 +279,19 @@ Result<StaticReport> StaticSolver::solve(const FemModel& model, const StaticProb
       if (iterations > kHardLoadStep) step *= 0.75;
       continue;
     }
-    // The full load's step failed only on the final tolerance, its residual under the intermediate
-    // one (limit_resolution): its state is a better equilibrium than any fraction below it. The
-    // solve ends there, not converged (a StVK teddy's rebound: 10 iterations to 3e-4, where the
-    // retries from below took 47 and ended at 0.875 of the load).
-    if (bracket && s == 1.0 && st.report.relative_residual <= intermediate_tolerance) {
+    // A step that brought its residual under the intermediate tolerance failed on the (tighter)
+    // final one, not for want of an equilibrium (limit_resolution): it bounds nothing. At the full
+    // load its state is a better equilibrium than any fraction below it, and the solve ends there,
+    // not converged (a StVK teddy's rebound: 10 iterations to 3e-4, where the retries from below
+    // took 47 and ended at 0.875 of the load); below it, the steps go on.
+    const bool near = st.report.relative_residual <= intermediate_tolerance;
+    if (bracket && near && s == 1.0) {
       done = s;
       failure = std::move(why);
       break;
     }
     x = x_good;
-    // A step that brought its residual under the intermediate tolerance failed on the (tighter)
-    // tolerance, not for want of an equilibrium: it bounds nothing, and the steps go on.
-    bounded = bracket && !(st.report.relative_residual <= intermediate_tolerance);
+    bounded = bracket && !near;
     if (bounded && s <= lowest_failed) {
       lowest_failed = s;
       failed_step = s - done;
