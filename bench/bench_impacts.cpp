@@ -36,7 +36,8 @@ std::string asset(const std::string& dir, const std::string& file) {
 }
 
 // The asset's mesh, or (refine > 1) its shape meshed with `refine` times the tets.
-std::shared_ptr<const BodyModel> model_of(const std::string& name, const std::string& material, int refine) {
+std::shared_ptr<const BodyModel> model_of(const std::string& name, const std::string& material, int refine,
+                                          ModelKind kind = ModelKind::stvk) {
   TetMesh mesh;
   if (refine <= 1) {
     mesh = read_mesh(asset("meshes", name + ".msh"))->mesh;
@@ -46,7 +47,7 @@ std::shared_ptr<const BodyModel> model_of(const std::string& name, const std::st
     def.stuffing.target_tets = shape->target_tets * refine;
     mesh = mesh_shape(shape->sdf, def, name)->mesh;
   }
-  return std::make_shared<const BodyModel>(std::move(*make_body_model(mesh, *material_preset(material))));
+  return std::make_shared<const BodyModel>(std::move(*make_body_model(mesh, *material_preset(material), kind)));
 }
 
 RigidState above_ground(const BodyModel& m, double height, const Quat& turn) {
@@ -66,7 +67,7 @@ void BM_Drop(benchmark::State& state) {
   auto& model = models[scene][slot];
   if (!model)
     model = scene == 0   ? model_of("vase", "porcelain", refine)
-            : scene == 1 ? model_of("teddy", "modelling_clay", refine)
+            : scene == 1 ? model_of("teddy", "modelling_clay", refine, ModelKind::corotated)
                          : model_of("cinder_block", "concrete", refine);
   auto clay = std::make_shared<ImpactSettings>();
   clay->fracture.plasticity.max_plastic_strain = 1.0;

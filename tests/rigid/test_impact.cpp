@@ -2,7 +2,9 @@
 // momentum and eq. 22 velocities kept, crack faces marked; dents that keep the mass.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <vector>
 
 #include "shatter/fem/material.h"
@@ -62,6 +64,96 @@ TEST(Hertz, FormulasAndScaling) {
   EXPECT_NEAR(hertz_impact(1.0, 4.43, 0.05, e_star).peak_force / h.peak_force, std::pow(2.0, 0.6), 1e-9);
   EXPECT_NEAR(hertz_impact(0.5, 8.86, 0.05, e_star).peak_force / h.peak_force, std::pow(2.0, 1.2), 1e-9);
   EXPECT_EQ(hertz_impact(0.5, 0, 0.05, e_star).peak_force, 0);
+}
+
+// The work of Thornton's force law from 0 to delta, by composite Simpson over each branch.
+double thornton_work(const ElasticPlasticImpact& p, double e_star, double radius, double limit_pressure) {
+  const double delta_y = std::min(p.yield_approach, p.max_approach);
+  const auto force = [&](double d) {
+    if (d <= p.yield_approach) return 4.0 / 3.0 * e_star * std::sqrt(radius) * std::pow(d, 1.5);
+    const double f_y = 4.0 / 3.0 * e_star * std::sqrt(radius) * std::pow(p.yield_approach, 1.5);
+    return f_y + std::numbers::pi * limit_pressure * radius * (d - p.yield_approach);
+  };
+  const auto simpson = [&](double a, double b) {
+    constexpr int n = 2000;
+    const double h = (b - a) / n;
+    double sum = force(a) + force(b);
+    for (int i = 1; i < n; ++i) sum += (i % 2 ? 4.0 : 2.0) * force(a + i * h);
+    return sum * h / 3.0;
+  };
+  return simpson(0, delta_y) + (p.max_approach > delta_y ? simpson(delta_y, p.max_approach) : 0.0);
+}
+
+TEST(Hertz, ThorntonElasticPlasticImpact) {
+  const Material clay = *material_preset("modelling_clay");
+  Material stone = *material_preset("granite");
+  const double e_star = hertz_effective_modulus(clay, stone);
+  const double radius = 0.15, mass = 8.7;
+  const double p_y = 2.8 * clay.yield_stress;
+  // Without a limit, or one never reached, it is Hertz's impact.
+  const HertzImpact h = hertz_impact(mass, 3.1, radius, e_star);
+  const ElasticPlasticImpact elastic = elastic_plastic_impact(mass, 3.1, radius, e_star, kInfinity);
+  EXPECT_FALSE(elastic.yielded);
+  EXPECT_EQ(elastic.peak_force, h.peak_force);
+  EXPECT_EQ(elastic.max_approach, h.max_approach);
+  EXPECT_FALSE(elastic_plastic_impact(mass, 3.1, radius, e_star, 1e3 * e_star).yielded);
+  // Hertz's peak pressure 2 E* sqrt(R delta_y) / (pi R) is p_y at delta_y.
+  const ElasticPlasticImpact p = elastic_plastic_impact(mass, 3.1, radius, e_star, p_y);
+  ASSERT_TRUE(p.yielded);
+  EXPECT_NEAR(2 * e_star * std::sqrt(radius * p.yield_approach) / (std::numbers::pi * radius), p_y, 1e-9 * p_y);
+  // Energy: the work of the force law up to the largest approach is the kinetic energy.
+  const double energy = 0.5 * mass * 3.1 * 3.1;
+  EXPECT_NEAR(thornton_work(p, e_star, radius, p_y), energy, 1e-9 * energy);
+  EXPECT_NEAR(p.contact_radius, std::sqrt(radius * p.max_approach), 1e-15);
+  // A yielding contact spends the energy over a deeper approach at a lower peak force, and the
+  // lower the more it yields; just past yield it is Hertz's.
+  EXPECT_GT(p.max_approach, h.max_approach);
+  EXPECT_LT(p.peak_force, h.peak_force);
+  double last_ratio = 1;
+  for (const double v : {0.5, 1.0, 2.0, 4.0, 8.0}) {
+    const double ratio = elastic_plastic_impact(mass, v, radius, e_star, p_y).peak_force /
+                         hertz_impact(mass, v, radius, e_star).peak_force;
+    EXPECT_LE(ratio, last_ratio) << v;
+    last_ratio = ratio;
+  }
+  // Speed at which delta_H = delta_y: a hair faster, the peak is Hertz's to first order.
+  const double v_y =
+      std::sqrt(2 * 8.0 / 15.0 * e_star * std::sqrt(radius) * std::pow(p.yield_approach, 2.5) / mass) * 1.0001;
+  const ElasticPlasticImpact just = elastic_plastic_impact(mass, v_y, radius, e_star, p_y);
+  EXPECT_TRUE(just.yielded);
+  EXPECT_NEAR(just.peak_force / hertz_impact(mass, v_y, radius, e_star).peak_force, 1, 1e-6);
+  // Far past yield, the mean pressure F / (pi a^2) tends to p_y.
+  const ElasticPlasticImpact deep = elastic_plastic_impact(1e4 * mass, 30, radius, e_star, p_y);
+  EXPECT_NEAR(deep.peak_force / (std::numbers::pi * deep.contact_radius * deep.contact_radius), p_y, 0.02 * p_y);
+}
+
+TEST(ImpactAnalysis, AYieldingContactCarriesLessThanHertz) {
+  // The same blow on a clay bar: the load is Hertz's times Thornton's ratio, on a wider patch.
+  const Material clay = *material_preset("modelling_clay");
+  const BodyModel bar = bar_model(clay);
+  ImpactSettings hertz_only;
+  hertz_only.hardness_factor = 0;
+  hertz_only.other_material = *material_preset("granite");
+  ImpactSettings yielding = hertz_only;
+  yielding.hardness_factor = 2.8;
+  BodyState s1 = make_body_state(bar, moving_state());
+  BodyState s2 = make_body_state(bar, moving_state());
+  const auto a = analyze_impact(bar, s1, blow_at_middle(s1.rigid, 2, 3), hertz_only);
+  const auto b = analyze_impact(bar, s2, blow_at_middle(s2.rigid, 2, 3), yielding);
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_TRUE(std::isinf(a->limit_pressure));
+  EXPECT_EQ(a->yield_scale, 1);
+  EXPECT_EQ(b->limit_pressure, 2.8 * clay.yield_stress);
+  EXPECT_LT(b->yield_scale, 1);
+  EXPECT_NEAR(b->force, a->force * b->yield_scale, 1e-12 * a->force);
+  EXPECT_GE(b->patch_radius, a->patch_radius);
+  // Glass on stone never yields: the default settings give Hertz's load.
+  const BodyModel glass_bar = bar_model(*material_preset("glass"));
+  BodyState s3 = make_body_state(glass_bar, moving_state());
+  const auto c = analyze_impact(glass_bar, s3, blow_at_middle(s3.rigid, 2, 3), yielding);
+  ASSERT_TRUE(c.ok());
+  EXPECT_TRUE(std::isinf(c->limit_pressure));
+  EXPECT_EQ(c->yield_scale, 1);
 }
 
 TEST(ImpactAnalysis, SlowOrEmptyContactsAreNotAnalysed) {

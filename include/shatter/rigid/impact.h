@@ -80,6 +80,13 @@ struct ImpactSettings {
   double patch_edges = 1.0;
   double min_patch_radius = 0.1;
   double patch_facing = 0.25;
+  /// Where the body or what it hit yields (a finite Material::yield_stress), the contact carries
+  /// a mean pressure of at most hardness_factor x the smaller yield stress: Tabor's hardness of a
+  /// fully plastic indentation, about 2.8-3 Y (Johnson, Contact Mechanics §6.2). Past it the
+  /// contact follows Thornton's elastic-plastic law (elastic_plastic_impact), and the load is
+  /// lowered by the ratio of its peak force to Hertz's for the same energy: a clay body landing
+  /// spends the energy in flow over a wider patch instead of pressing harder. 0: Hertz alone.
+  double hardness_factor = 2.8;
   /// The Hertz contact time is kept within [min_contact_time, max_contact_time], s.
   double min_contact_time = 1e-5;
   double max_contact_time = 0.05;
@@ -130,10 +137,16 @@ struct ImpactResult {
   /// False when the contacts carry no impulse or are slower than min_approach_speed: nothing was
   /// solved and the body is unchanged.
   bool analysed = false;
-  double approach_speed = 0;        ///< largest approach speed of the loaded contacts, m/s
-  double impulse = 0;               ///< total normal impulse, N s
-  double effective_mass = 0;        ///< impulse / ((1 + e) v), kg
-  double contact_time = 0;          ///< Hertz contact time (clamped), s
+  double approach_speed = 0;  ///< largest approach speed of the loaded contacts, m/s
+  double impulse = 0;         ///< total normal impulse, N s
+  double effective_mass = 0;  ///< impulse / ((1 + e) v), kg
+  double contact_time = 0;    ///< Hertz contact time (clamped), s
+  /// Mean contact pressure the contact yields at (ImpactSettings::hardness_factor), Pa; +inf when
+  /// neither side yields.
+  double limit_pressure = kInfinity;
+  /// Peak force of the yielding contact over Hertz's, for the impact's energy (1: elastic); the
+  /// load is Hertz's times this.
+  double yield_scale = 1;
   double force = 0;                 ///< total static load, N (the peak of the impact)
   double patch_radius = 0;          ///< radius the load of each contact is spread over, m
   double collision_radius = 0;      ///< r_coll, m (0 when held by inertia relief)
@@ -202,5 +215,21 @@ struct HertzImpact {
   double peak_force = 0;      ///< 4/3 E* sqrt(R) delta^(3/2), N
 };
 HertzImpact hertz_impact(double effective_mass, double speed, double radius, double effective_modulus);
+
+/// Thornton's elastic-perfectly-plastic impact of the same sphere (C. Thornton, J. Appl. Mech. 64,
+/// 1997): Hertz's law F = 4/3 E* sqrt(R) delta^(3/2) until the peak pressure 2 E* a / (pi R)
+/// reaches the limit pressure p_y, at delta_y = R (pi p_y / (2 E*))^2; then
+/// F = F_y + pi p_y R (delta - delta_y), so the mean pressure tends to p_y. The largest approach is
+/// where the work of F equals the kinetic energy m v^2 / 2. With p_y = +inf (or never reached) it
+/// is hertz_impact's delta and peak force.
+struct ElasticPlasticImpact {
+  double max_approach = 0;    ///< delta, m
+  double yield_approach = 0;  ///< delta_y, m (+inf when p_y is)
+  double contact_radius = 0;  ///< sqrt(R delta), m
+  double peak_force = 0;      ///< F(delta), N
+  bool yielded = false;       ///< delta > delta_y
+};
+ElasticPlasticImpact elastic_plastic_impact(double effective_mass, double speed, double radius,
+                                            double effective_modulus, double limit_pressure);
 
 }  // namespace shatter

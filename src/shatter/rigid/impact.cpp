@@ -532,6 +532,33 @@ HertzImpact hertz_impact(double effective_mass, double speed, double radius, dou
   return h;
 }
 
+ElasticPlasticImpact elastic_plastic_impact(double effective_mass, double speed, double radius,
+                                            double effective_modulus, double limit_pressure) {
+  ElasticPlasticImpact p;
+  const HertzImpact h = hertz_impact(effective_mass, speed, radius, effective_modulus);
+  p.max_approach = h.max_approach;
+  p.contact_radius = h.contact_radius;
+  p.peak_force = h.peak_force;
+  p.yield_approach = kInfinity;
+  if (!(h.max_approach > 0) || !(limit_pressure > 0) || std::isinf(limit_pressure)) return p;
+  // Hertz's peak pressure 2 E* a / (pi R) with a = sqrt(R delta) reaches p_y at delta_y.
+  const double ratio = std::numbers::pi * limit_pressure / (2.0 * effective_modulus);
+  p.yield_approach = radius * ratio * ratio;
+  if (h.max_approach <= p.yield_approach) return p;
+  // Past delta_y the force grows linearly with stiffness k = pi p_y R; the work up to delta_y is
+  // Hertz's (8/15) E* sqrt(R) delta_y^(5/2) = (2/5) F_y delta_y. The rest of the energy E - W_y =
+  // F_y x + k x^2 / 2 over the further approach x gives the peak F_y + k x = sqrt(F_y^2 + 2 k (E - W_y)).
+  const double k = std::numbers::pi * limit_pressure * radius;
+  const double force_y = 4.0 / 3.0 * effective_modulus * std::sqrt(radius) * std::pow(p.yield_approach, 1.5);
+  const double work_y = 0.4 * force_y * p.yield_approach;
+  const double energy = 0.5 * effective_mass * speed * speed;
+  p.peak_force = std::sqrt(force_y * force_y + 2.0 * k * std::max(energy - work_y, 0.0));
+  p.max_approach = p.yield_approach + (p.peak_force - force_y) / k;
+  p.contact_radius = std::sqrt(radius * p.max_approach);
+  p.yielded = true;
+  return p;
+}
+
 Result<ImpactResult> analyze_impact(const BodyModel& model, BodyState& state, std::span<const ImpactContact> contacts,
                                     const ImpactSettings& settings) {
   SHATTER_TRY(checked, check_state(model, state, "analyze_impact"));
@@ -566,15 +593,29 @@ Result<ImpactResult> analyze_impact(const BodyModel& model, BodyState& state, st
   result.load_point = weighted_point / result.impulse;
 
   // The load: Hertz's contact time for the effective mass the impulse implies, and the impulse
-  // delivered as a half-sine pulse of that duration, whose peak is (pi/2) J / T_c.
+  // delivered as a half-sine pulse of that duration, whose peak is (pi/2) J / T_c. Where the
+  // contact yields, Thornton's law lowers that peak by the ratio of its peak force to Hertz's and
+  // widens the patch to its contact radius.
   const double body_radius = body_radius_of(model);
   const Material& material = model.fem.material;
-  const double e_star = hertz_effective_modulus(material, settings.other_material.value_or(material));
+  const Material& other = settings.other_material.value_or(material);
+  const double e_star = hertz_effective_modulus(material, other);
+  const double curvature = settings.curvature_radius * body_radius;
   result.effective_mass = result.impulse / ((1 + settings.restitution) * result.approach_speed);
-  const HertzImpact hertz =
-      hertz_impact(result.effective_mass, result.approach_speed, settings.curvature_radius * body_radius, e_star);
+  const HertzImpact hertz = hertz_impact(result.effective_mass, result.approach_speed, curvature, e_star);
   result.contact_time = std::clamp(hertz.contact_time, settings.min_contact_time, settings.max_contact_time);
   result.force = 0.5 * std::numbers::pi * result.impulse / result.contact_time;
+  double contact_radius = hertz.contact_radius;
+  if (settings.hardness_factor > 0) {
+    result.limit_pressure = settings.hardness_factor * std::min(material.yield_stress, other.yield_stress);
+    const ElasticPlasticImpact plastic =
+        elastic_plastic_impact(result.effective_mass, result.approach_speed, curvature, e_star, result.limit_pressure);
+    if (plastic.yielded) {
+      result.yield_scale = plastic.peak_force / hertz.peak_force;
+      result.force *= result.yield_scale;
+      contact_radius = plastic.contact_radius;
+    }
+  }
 
   // Each contact's share of the load, in proportion to its impulse, spread over its patch.
   std::vector<Vec3> forces(nn, Vec3::Zero());
@@ -583,8 +624,8 @@ Result<ImpactResult> analyze_impact(const BodyModel& model, BodyState& state, st
   shares.reserve(loads.size());
   for (const LocalLoad& l : loads) shares.push_back(result.force * l.impulse / result.impulse);
   result.patch_radius =
-      spread_loads(model, loads, shares, std::max(hertz.contact_radius, settings.min_patch_radius * body_radius),
-                   settings, forces, loaded);
+      spread_loads(model, loads, shares, std::max(contact_radius, settings.min_patch_radius * body_radius), settings,
+                   forces, loaded);
   result.loaded_nodes = static_cast<Index>(std::count(loaded.begin(), loaded.end(), 1));
   SHATTER_TRY(done, respond(model, state, loads, std::move(forces), body_radius, settings, result));
   return result;

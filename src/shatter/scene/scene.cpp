@@ -83,6 +83,7 @@ Result<ImpactSettings> read_impact(const Json& value, const Where& where, Impact
       {"min_approach_speed", &base.min_approach_speed, 0, 1e6, "a speed >= 0 (m/s)"},
       {"collision_radius", &base.collision_radius, 1e-3, 10, "a fraction of the body's radius in [0.001, 10]"},
       {"curvature_radius", &base.curvature_radius, 1e-3, 100, "a fraction of the body's radius in [0.001, 100]"},
+      {"hardness_factor", &base.hardness_factor, 0, 100, "a multiple of the yield stress in [0, 100] (0: Hertz alone)"},
       {"min_fragment_fraction", &base.min_fragment_fraction, 0, 1, "a fraction of the body's mass in [0, 1]"},
       {"max_plastic_strain", &base.fracture.plasticity.max_plastic_strain, 0, 1e6, "a strain >= 0"},
       {"creep", &base.fracture.plasticity.creep, 0, 1, "a fraction in [0, 1]"},
