@@ -188,6 +188,8 @@ struct ImpactRecord {
   double impulse = 0;         ///< N s
   double contact_time = 0;    ///< s
   double force = 0;           ///< static load, N
+  /// The load over the elastic (Hertz) load: below 1 where the contact yields (ImpactResult)
+  double yield_scale = 1;
   /// r_coll, m: with the anchor-far hold, every node farther than this from the load was held
   /// (0 for inertia relief and slices)
   double collision_radius = 0;

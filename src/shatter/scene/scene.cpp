@@ -705,6 +705,7 @@ void collect_events(const StepEvents& ev, double time, std::vector<std::string>&
         {"impulse", e.impulse},
         {"contact_time", e.contact_time},
         {"force", e.force},
+        {"yield_scale", e.yield_scale},
         {"max_principal_stress", e.max_principal_stress},
         {"max_von_mises", e.max_von_mises},
         {"converged", e.converged},

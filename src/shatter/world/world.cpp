@@ -1884,6 +1884,7 @@ void World::apply_impact(Index id, Index other, ImpactResult& r,
   rec.impulse = r.impulse;
   rec.contact_time = r.contact_time;
   rec.force = r.force;
+  rec.yield_scale = r.yield_scale;
   rec.collision_radius = r.collision_radius;
   rec.max_principal_stress = r.max_principal_stress;
   rec.max_von_mises = r.max_von_mises;
