@@ -56,7 +56,7 @@ RunFn setup_convert(CLI::App& sub) {
   return [args] { return run_convert(*args); };
 }
 
-const Registration reg{"convert", "Convert a mesh between formats (by extension)", &setup_convert};
+const Registration convert_command{"convert", "Convert a mesh between formats (by extension)", &setup_convert};
 
 }  // namespace
 }  // namespace shatter::cli

@@ -182,8 +182,8 @@ RunFn setup_inspect(CLI::App& sub) {
   return [args] { return run_inspect(*args); };
 }
 
-const Registration reg{"inspect", "Describe a mesh: counts, bounds, volume, quality, components, problems",
-                       &setup_inspect};
+const Registration inspect_command{"inspect", "Describe a mesh: counts, bounds, volume, quality, components, problems",
+                                   &setup_inspect};
 
 }  // namespace
 }  // namespace shatter::cli

@@ -273,7 +273,7 @@ RunFn setup_mesh(CLI::App& sub) {
   return [a] { return run_mesh(*a); };
 }
 
-const Registration reg{"mesh", "Tetrahedral mesh of a primitive, JSON shape or closed surface", &setup_mesh};
+const Registration mesh_command{"mesh", "Tetrahedral mesh of a primitive, JSON shape or closed surface", &setup_mesh};
 
 }  // namespace
 }  // namespace shatter::cli

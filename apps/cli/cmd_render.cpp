@@ -46,8 +46,8 @@ struct RenderArgs {
   bool json = false;
 };
 
-std::atomic<bool> g_stop{false};
-extern "C" void on_render_interrupt(int /*signal*/) { g_stop.store(true); }
+std::atomic<bool> g_render_stop{false};
+extern "C" void on_render_interrupt(int /*signal*/) { g_render_stop.store(true); }
 
 // The program's full path when it is on PATH, else "".
 std::string find_program(const std::string& name) {
@@ -167,7 +167,7 @@ int render(const RenderArgs& args) {
   };
   if (!write_frame()) return kExitOutput;
   while (steps < total_steps) {
-    if (g_stop.load()) {
+    if (g_render_stop.load()) {
       stopped = true;
       break;
     }
@@ -261,7 +261,8 @@ RunFn setup_render(CLI::App& sub) {
   return [args] { return render(*args); };
 }
 
-const Registration reg{"render", "Render a scene to PNG frames (and an MP4) without a window", &setup_render};
+const Registration render_command{"render", "Render a scene to PNG frames (and an MP4) without a window",
+                                  &setup_render};
 
 }  // namespace
 }  // namespace shatter::cli

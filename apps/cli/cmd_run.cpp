@@ -31,9 +31,9 @@ struct RunArgs {
   bool no_output = false;
 };
 
-std::atomic<bool> g_stop{false};
+std::atomic<bool> g_run_stop{false};
 
-extern "C" void on_interrupt(int /*signal*/) { g_stop.store(true); }
+extern "C" void on_interrupt(int /*signal*/) { g_run_stop.store(true); }
 
 int run(const RunArgs& args) {
   const std::string path = args.scene.empty() ? default_scene_path() : args.scene;
@@ -48,7 +48,7 @@ int run(const RunArgs& args) {
     return report_error("--no-output and --out exclude each other", kExitUsage);
   options.out_dir = args.no_output ? "" : args.out_dir.empty() ? scene->name + "_out" : args.out_dir;
   if (args.time >= 0) options.duration = args.time;
-  options.stop = &g_stop;
+  options.stop = &g_run_stop;
   const bool tty = isatty(fileno(stderr)) != 0;
   const auto t0 = std::chrono::steady_clock::now();
   auto last_print = t0;
@@ -125,7 +125,7 @@ RunFn setup_run(CLI::App& sub) {
   return [args] { return run(*args); };
 }
 
-const Registration reg{"run", "Simulate a scene: drops, impacts, dents and fractures", &setup_run};
+const Registration run_command{"run", "Simulate a scene: drops, impacts, dents and fractures", &setup_run};
 
 }  // namespace
 }  // namespace shatter::cli

@@ -263,7 +263,7 @@ RunFn setup_static(CLI::App& sub) {
   return [args] { return run_static(*args); };
 }
 
-const Registration reg{"static", "Static analysis of a mesh under anchors and loads", &setup_static};
+const Registration static_command{"static", "Static analysis of a mesh under anchors and loads", &setup_static};
 
 }  // namespace
 }  // namespace shatter::cli

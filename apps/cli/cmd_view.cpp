@@ -40,7 +40,8 @@ RunFn setup_view(CLI::App& sub) {
   return [args] { return view(*args); };
 }
 
-const Registration reg{"view", "Open a scene in the interactive viewer (tools, stress view, recording)", &setup_view};
+const Registration view_command{"view", "Open a scene in the interactive viewer (tools, stress view, recording)",
+                                &setup_view};
 
 }  // namespace
 }  // namespace shatter::cli

@@ -13,7 +13,7 @@
 namespace shatter {
 namespace {
 
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
+using test::quoted;
 
 TEST(CmdInspect, ReportsCountsQualityAndJson) {
   test::TempDir dir;

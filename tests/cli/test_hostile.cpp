@@ -45,14 +45,7 @@ using test::kSanitized;
 
 bool have_cli() { return !test::cli_path().empty() && fs::exists(test::cli_path()); }
 
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
-
-std::string read_all(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using test::quoted;
 
 void write_all(const fs::path& p, const std::string& bytes) { std::ofstream(p, std::ios::binary) << bytes; }
 
@@ -61,7 +54,7 @@ std::map<std::string, std::string> snapshot(const fs::path& dir) {
   std::map<std::string, std::string> files;
   if (!fs::exists(dir)) return files;
   for (const auto& e : fs::recursive_directory_iterator(dir))
-    if (e.is_regular_file()) files[fs::relative(e.path(), dir).string()] = read_all(e.path());
+    if (e.is_regular_file()) files[fs::relative(e.path(), dir).string()] = test::read_text(e.path());
   return files;
 }
 
@@ -82,7 +75,7 @@ RunResult run_limited(const std::string& args, int seconds = 60) {
   cmd +=
       "timeout -s KILL " + std::to_string(seconds) + " " + test::cli_path() + " " + args + " 2>" + quoted(err.string());
   const test::CommandResult r = test::run_command(cmd);
-  RunResult run{r.status, r.output, read_all(err)};
+  RunResult run{r.status, r.output, test::read_text(err)};
   fs::remove(err);
   return run;
 }
@@ -480,7 +473,7 @@ TEST(HostileInput, SurfaceWithAStrayVertex) {
                         cli + " convert -q --binary " + quoted(dir.file("s.vtu")) + " " + quoted(dir.file("s.stl")))
           .status,
       0);
-  const std::string stl = read_all(dir.path() / "s.stl");
+  const std::string stl = test::read_text(dir.path() / "s.stl");
   ASSERT_GT(stl.size(), 84U + 50 * 6);
   auto stray = [&](float x, const std::string& name) {
     std::string bytes = stl;
@@ -581,7 +574,7 @@ TEST(HostileInput, MutatedFiles) {
   const fs::path kept = fs::current_path() / "hostile_failures";  // outlives the test's folder
   int runs = 0;
   for (const auto& [file, kind] : seed_files()) {
-    const std::string bytes = read_all(seeds.path(file));
+    const std::string bytes = test::read_text(seeds.path(file));
     ASSERT_FALSE(bytes.empty()) << file;
     Random rng(std::hash<std::string>{}(file) ^ 20261201);  // per-file stream: adding a seed changes no other
     for (int k = 0; k < per_seed; ++k) {

@@ -130,7 +130,7 @@ ConvexHull make_triangle_hull(const std::vector<Vec3>& p) {
   return make_hull(p, loops);
 }
 
-Mat3 random_rotation(Random& rng) {
+Mat3 random_axis_angle(Random& rng) {
   const Vec3 axis = rng.unit_vec3();
   return Eigen::AngleAxisd(rng.uniform(0, 2 * std::numbers::pi), axis).toRotationMatrix();
 }
@@ -142,12 +142,12 @@ ConvexHull random_hull(Random& rng, int kind) {
     // Each draw in its own statement: the order of a call's arguments is the compiler's choice.
     case 0: {
       const Vec3 half = rng.uniform_vec3(0.1, 1.0);
-      return make_box(half, random_rotation(rng));
+      return make_box(half, random_axis_angle(rng));
     }
     case 1: {
       const int sides = 3 + static_cast<int>(rng.below(10));
       const double radius = rng.uniform(0.2, 1.0), height = rng.uniform(0.1, 1.5);
-      return make_prism(sides, radius, height, random_rotation(rng));
+      return make_prism(sides, radius, height, random_axis_angle(rng));
     }
     case 2: {  // a tetrahedron of decent shape
       std::vector<Vec3> p;
@@ -161,7 +161,7 @@ ConvexHull random_hull(Random& rng, int kind) {
     case 4: {  // the hull builder on 8..40 points in a rotated box (some inside)
       const int n = 8 + static_cast<int>(rng.below(33));
       const Vec3 half = rng.uniform_vec3(0.2, 1.0);
-      const Mat3 r = random_rotation(rng);
+      const Mat3 r = random_axis_angle(rng);
       std::vector<Vec3> p;
       for (int i = 0; i < n; ++i) p.push_back(r * rng.uniform_vec3(-1, 1).cwiseProduct(half));
       auto hull = build_convex_hull(p);
@@ -170,7 +170,7 @@ ConvexHull random_hull(Random& rng, int kind) {
     }
     case 5: {  // the hull builder on a box's corners and points on its faces: merged polygon faces
       const Vec3 half = rng.uniform_vec3(0.2, 1.0);
-      const Mat3 r = random_rotation(rng);
+      const Mat3 r = random_axis_angle(rng);
       std::vector<Vec3> p;
       for (int i = 0; i < 8; ++i)
         p.push_back(
@@ -190,7 +190,7 @@ ConvexHull random_hull(Random& rng, int kind) {
     default: {  // 8..32 points on an ellipsoid
       const int n = 8 + static_cast<int>(rng.below(25));
       const Vec3 axes = rng.uniform_vec3(0.2, 1.0);
-      const Mat3 r = random_rotation(rng);
+      const Mat3 r = random_axis_angle(rng);
       std::vector<Vec3> p;
       for (int i = 0; i < n; ++i) p.push_back(r * rng.unit_vec3().cwiseProduct(axes));
       return make_triangle_hull(p);
@@ -366,7 +366,7 @@ TEST(Contact, CrossedEdgesGiveOnePointWithTheAnalyticDepth) {
   Random rng(11);
   for (int trial = 0; trial < 20; ++trial) {
     // The whole scene in a random rigid placement (the first trial: none).
-    const Mat3 g = trial == 0 ? Mat3::Identity() : random_rotation(rng);
+    const Mat3 g = trial == 0 ? Mat3::Identity() : random_axis_angle(rng);
     const Vec3 shift = trial == 0 ? Vec3::Zero() : rng.uniform_vec3(-5, 5);
     const Transform ta = at(shift, g * rot(std::numbers::pi / 4, Vec3::UnitX()));
     const Transform tb = at(g * Vec3(0, 2 * h - d, 0) + shift, g * rot(std::numbers::pi / 4, Vec3::UnitZ()));
@@ -391,10 +391,10 @@ TEST(Contact, RandomPairsMatchBruteForceSeparatingAxes) {
     const ConvexHull a = random_hull(rng, static_cast<int>(rng.below(6)));
     const ConvexHull b = random_hull(rng, static_cast<int>(rng.below(6)));
     const Vec3 pa = rng.uniform_vec3(-2, 2);
-    const Transform ta = at(pa, random_rotation(rng));
+    const Transform ta = at(pa, random_axis_angle(rng));
     // B's centroid at a random distance up to the sum of the radii from A's.
     const Vec3 ca = ta.apply(a.centroid);
-    const Mat3 rb = random_rotation(rng);
+    const Mat3 rb = random_axis_angle(rng);
     const Vec3 towards = rng.unit_vec3();
     const Vec3 cb = ca + towards * rng.uniform(0.0, 1.1) * (a.radius + b.radius);
     const Transform tb = at(cb - rb * b.centroid, rb);
@@ -678,7 +678,7 @@ TEST(Contact, BoxOnPlane) {
   for (int trial = 0; trial < 300; ++trial) {
     const ConvexHull h = random_hull(rng, static_cast<int>(rng.below(6)));
     const Vec3 origin = rng.uniform_vec3(-1, 1);
-    const Transform t = at(origin, random_rotation(rng));
+    const Transform t = at(origin, random_axis_angle(rng));
     const Plane plane{rng.unit_vec3(), rng.uniform(-0.5, 0.5)};
     const double spec = rng.uniform(0.0, 0.3);
     const auto sep_of = [&](Index i) {

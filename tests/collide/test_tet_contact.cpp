@@ -24,7 +24,7 @@ TetContactShape box_shape(const Vec3& lo, const Vec3& hi, std::array<Index, 3> c
       make_box_mesh({.min = lo, .max = hi, .cells = cells, .pattern = pattern, .jitter = jitter, .seed = seed}));
 }
 
-Mat3 random_rotation(Random& rng) {
+Mat3 random_angle_axis(Random& rng) {
   const double angle = rng.uniform(0, 2 * std::numbers::pi);  // drawn first, whatever the compiler
   return Eigen::AngleAxisd(angle, rng.unit_vec3()).toRotationMatrix();
 }
@@ -158,7 +158,7 @@ TEST(TetContact, LocateTetMatchesBruteForce) {
                                      .pattern = BoxMeshDef::Pattern::five,
                                      .jitter = 0.2,
                                      .seed = 3});
-  const TetMesh turned = rotated(box, random_rotation(rng), Vec3(1, -2, 0.5));
+  const TetMesh turned = rotated(box, random_angle_axis(rng), Vec3(1, -2, 0.5));
   for (const TetMesh* m : {&box, &turned}) {
     const auto s = shape_of(*m);
     int inside = 0, total = 0;
@@ -182,7 +182,7 @@ TEST(TetContact, ClosestBoundaryPointMatchesBruteForce) {
                                            .cells = {6, 2, 4},
                                            .pattern = BoxMeshDef::Pattern::five,
                                            .jitter = 0.2}),
-                            random_rotation(rng), Vec3::Zero());
+                            random_angle_axis(rng), Vec3::Zero());
   const auto s = shape_of(m);
   int inside = 0;
   for (const Vec3& p : query_points(rng, m, 3000, 0.5)) {
@@ -298,8 +298,8 @@ TEST(TetContact, VertexContactsMatchBruteForceOnRandomScenes) {
         box_shape(Vec3::Zero(), rng.uniform_vec3(0.3, 1.0), {3, 3, 3}, BoxMeshDef::Pattern::five, 0.2, rng.next_u64());
     const auto b =
         box_shape(Vec3::Zero(), rng.uniform_vec3(0.3, 1.0), {2, 3, 4}, BoxMeshDef::Pattern::six, 0.2, rng.next_u64());
-    const Transform ta{random_rotation(rng), rng.uniform_vec3(-1, 1)};
-    const Transform tb{random_rotation(rng), ta.translation + rng.uniform_vec3(-0.6, 0.6)};
+    const Transform ta{random_angle_axis(rng), rng.uniform_vec3(-1, 1)};
+    const Transform tb{random_angle_axis(rng), ta.translation + rng.uniform_vec3(-0.6, 0.6)};
     const double speculative = 0.05;
     const auto got = collide(a, ta, b, tb, speculative);
     check_vertex_contacts(a, ta, b, tb, speculative, got, inside, outside);
@@ -317,7 +317,7 @@ TEST(TetContact, BoxesOverlappingFaceToFace) {
   Random rng(14);
   const auto a = box_shape(Vec3::Zero(), Vec3::Ones(), {4, 4, 4});
   const auto b = box_shape(Vec3(-0.3, 0, -0.35), Vec3(0.3, 0.5, 0.35), {3, 2, 3});
-  const Transform world{random_rotation(rng), rng.uniform_vec3(-5, 5)};
+  const Transform world{random_angle_axis(rng), rng.uniform_vec3(-5, 5)};
   const Transform ta = world;
   const Transform tb{world.rotation, world.apply(Vec3(0.5, 0.999, 0.5))};
   const auto got = collide(a, ta, b, tb, 1e-4);
@@ -431,8 +431,8 @@ TEST(TetContact, SameInputsSameOutput) {
   EXPECT_EQ(a1.bvh_triangles, a2.bvh_triangles);
   for (int trial = 0; trial < 5; ++trial) {
     // Turned about their centres (0.4, 0.25, 0.3) and (0.2, 0.45, 0.25), centres 0.2 apart or less.
-    const Transform ta{random_rotation(rng), Vec3::Zero()};
-    const Mat3 rb = random_rotation(rng);
+    const Transform ta{random_angle_axis(rng), Vec3::Zero()};
+    const Mat3 rb = random_angle_axis(rng);
     const Transform tb{rb, ta.apply(Vec3(0.4, 0.25, 0.3)) - rb * Vec3(0.2, 0.45, 0.25) + rng.uniform_vec3(-0.1, 0.1)};
     const auto x = collide(a1, ta, b1, tb, 0.02);
     const auto y = collide(a2, ta, b2, tb, 0.02);

@@ -53,12 +53,12 @@ TEST(Material, LameParameters) {
 TEST(Material, ValidationNamesTheField) {
   const Material good = *material_preset("glass");
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  struct Case {
+  struct FieldCase {
     const char* field;
     void (*edit)(Material&, double);
     double value;
   };
-  const Case cases[] = {
+  const FieldCase cases[] = {
       {"youngs_modulus", [](Material& m, double v) { m.youngs_modulus = v; }, 0.0},
       {"youngs_modulus", [](Material& m, double v) { m.youngs_modulus = v; }, -1e9},
       {"youngs_modulus", [](Material& m, double v) { m.youngs_modulus = v; }, nan},
@@ -73,7 +73,7 @@ TEST(Material, ValidationNamesTheField) {
       {"yield_stress", [](Material& m, double v) { m.yield_stress = v; }, -5.0},
       {"fracture_toughness", [](Material& m, double v) { m.fracture_toughness = v; }, nan},
   };
-  for (const Case& c : cases) {
+  for (const FieldCase& c : cases) {
     Material m = good;
     c.edit(m, c.value);
     const Result<void> r = validate_material(m);

@@ -11,7 +11,7 @@
 namespace shatter {
 namespace {
 
-void expect_error(const Result<MeshReadResult>& r, const std::string& substring, std::int64_t line) {
+void expect_inp_error(const Result<MeshReadResult>& r, const std::string& substring, std::int64_t line) {
   test::expect_read_error(r, substring, line, "t.inp");
 }
 
@@ -91,33 +91,33 @@ TEST(InpRead, CrlfAndBom) {
 
 TEST(InpRead, Malformed) {
   const std::string nodes = "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n";  // lines 1-5
-  expect_error(parse_inp("", "t.inp"), "empty file", 1);
-  expect_error(parse_inp("1, 0, 0, 0\n", "t.inp"), "expected a keyword line", 1);
-  expect_error(parse_inp(nodes, "t.inp"), "no C3D4 or C3D10", 6);
-  expect_error(parse_inp("*ELEMENT, TYPE=C3D4\n1,1,2,3,4\n", "t.inp"), "no *NODE", 3);
-  expect_error(parse_inp(nodes + "*ELEMENT\n1,1,2,3,4\n", "t.inp"), "without TYPE=", 6);
-  expect_error(parse_inp(nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3\n", "t.inp"), "3 node numbers", 7);
-  expect_error(parse_inp(nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3\n*NSET,NSET=A\n1\n", "t.inp"), "3 node numbers", 7);
-  expect_error(parse_inp(nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,4,5\n", "t.inp"), "5 node numbers", 7);
-  expect_error(parse_inp(nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,9\n", "t.inp"), "node 9", 7);
-  expect_error(parse_inp(nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,-1\n", "t.inp"), "node -1", 7);
-  expect_error(parse_inp(nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,x\n", "t.inp"), "node number", 7);
-  expect_error(parse_inp(nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,4\n1,1,2,3,4\n", "t.inp"), "defined twice", 8);
-  expect_error(parse_inp("*NODE\n1,0,0,0\n1,1,0,0\n", "t.inp"), "node 1 is defined twice", 3);
-  expect_error(parse_inp("*NODE\n1,0,nan,0\n", "t.inp"), "finite number", 2);
-  expect_error(parse_inp("*NODE\n1\n", "t.inp"), "node number, x, y, z", 2);
-  expect_error(parse_inp("*NODE\n1.5,0,0,0\n", "t.inp"), "node number", 2);
+  expect_inp_error(parse_inp("", "t.inp"), "empty file", 1);
+  expect_inp_error(parse_inp("1, 0, 0, 0\n", "t.inp"), "expected a keyword line", 1);
+  expect_inp_error(parse_inp(nodes, "t.inp"), "no C3D4 or C3D10", 6);
+  expect_inp_error(parse_inp("*ELEMENT, TYPE=C3D4\n1,1,2,3,4\n", "t.inp"), "no *NODE", 3);
+  expect_inp_error(parse_inp(nodes + "*ELEMENT\n1,1,2,3,4\n", "t.inp"), "without TYPE=", 6);
+  expect_inp_error(parse_inp(nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3\n", "t.inp"), "3 node numbers", 7);
+  expect_inp_error(parse_inp(nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3\n*NSET,NSET=A\n1\n", "t.inp"), "3 node numbers", 7);
+  expect_inp_error(parse_inp(nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,4,5\n", "t.inp"), "5 node numbers", 7);
+  expect_inp_error(parse_inp(nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,9\n", "t.inp"), "node 9", 7);
+  expect_inp_error(parse_inp(nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,-1\n", "t.inp"), "node -1", 7);
+  expect_inp_error(parse_inp(nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,x\n", "t.inp"), "node number", 7);
+  expect_inp_error(parse_inp(nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,4\n1,1,2,3,4\n", "t.inp"), "defined twice", 8);
+  expect_inp_error(parse_inp("*NODE\n1,0,0,0\n1,1,0,0\n", "t.inp"), "node 1 is defined twice", 3);
+  expect_inp_error(parse_inp("*NODE\n1,0,nan,0\n", "t.inp"), "finite number", 2);
+  expect_inp_error(parse_inp("*NODE\n1\n", "t.inp"), "node number, x, y, z", 2);
+  expect_inp_error(parse_inp("*NODE\n1.5,0,0,0\n", "t.inp"), "node number", 2);
   const std::string tet = nodes + "*ELEMENT, TYPE=C3D4\n1,1,2,3,4\n";  // lines 6-7
-  expect_error(parse_inp(tet + "*NSET,NSET=A,GENERATE\n1,1000000000000000000,1\n", "t.inp"), "larger than the 4 nodes",
-               9);
-  expect_error(parse_inp(tet + "*NSET,NSET=A,GENERATE\n4,1\n", "t.inp"), "first <= last", 9);
-  expect_error(parse_inp(tet + "*NSET,NSET=A,GENERATE\n1,4,0\n", "t.inp"), "increment > 0", 9);
-  expect_error(parse_inp(tet + "*NSET,NSET=A,GENERATE\n1,4,2,1\n", "t.inp"), "first, last", 9);
-  expect_error(parse_inp(tet + "*ELSET,ELSET=A,GENERATE\n1,3\n", "t.inp"), "larger than the 1 elements", 9);
-  expect_error(parse_inp(tet + "*NSET,NSET=A\n1, 7\n", "t.inp"), "node 7 is not defined", 9);
-  expect_error(parse_inp(tet + "*ELSET,ELSET=A\n2\n", "t.inp"), "element 2 is not defined", 9);
-  expect_error(parse_inp(tet + "*ELSET,ELSET=A\nNOPE\n", "t.inp"), "set name", 9);
-  expect_error(parse_inp(tet + "*NSET\n1\n", "t.inp"), "without NSET=", 8);
+  expect_inp_error(parse_inp(tet + "*NSET,NSET=A,GENERATE\n1,1000000000000000000,1\n", "t.inp"),
+                   "larger than the 4 nodes", 9);
+  expect_inp_error(parse_inp(tet + "*NSET,NSET=A,GENERATE\n4,1\n", "t.inp"), "first <= last", 9);
+  expect_inp_error(parse_inp(tet + "*NSET,NSET=A,GENERATE\n1,4,0\n", "t.inp"), "increment > 0", 9);
+  expect_inp_error(parse_inp(tet + "*NSET,NSET=A,GENERATE\n1,4,2,1\n", "t.inp"), "first, last", 9);
+  expect_inp_error(parse_inp(tet + "*ELSET,ELSET=A,GENERATE\n1,3\n", "t.inp"), "larger than the 1 elements", 9);
+  expect_inp_error(parse_inp(tet + "*NSET,NSET=A\n1, 7\n", "t.inp"), "node 7 is not defined", 9);
+  expect_inp_error(parse_inp(tet + "*ELSET,ELSET=A\n2\n", "t.inp"), "element 2 is not defined", 9);
+  expect_inp_error(parse_inp(tet + "*ELSET,ELSET=A\nNOPE\n", "t.inp"), "set name", 9);
+  expect_inp_error(parse_inp(tet + "*NSET\n1\n", "t.inp"), "without NSET=", 8);
 }
 
 // Sets that each name the previous set twice, 40 levels deep (about 1 KB): 2^40 members unless

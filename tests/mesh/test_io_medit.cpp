@@ -10,7 +10,7 @@
 namespace shatter {
 namespace {
 
-void expect_error(const Result<MeshReadResult>& r, const std::string& substring, std::int64_t line) {
+void expect_medit_error(const Result<MeshReadResult>& r, const std::string& substring, std::int64_t line) {
   test::expect_read_error(r, substring, line, "t.mesh");
 }
 
@@ -54,27 +54,28 @@ TEST(MeditRead, UnknownSectionAndCrlfAndNoEnd) {
 TEST(MeditRead, Malformed) {
   const std::string head = "MeshVersionFormatted 2\nDimension 3\n";
   const std::string verts = head + "Vertices\n4\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\n";
-  expect_error(parse_medit("", "t.mesh"), "empty file", 1);
-  expect_error(parse_medit("Dimension 3\n", "t.mesh"), "expected 'MeshVersionFormatted'", 1);
-  expect_error(parse_medit("MeshVersionFormatted 7\n", "t.mesh"), "version", 1);
-  expect_error(parse_medit("MeshVersionFormatted 2\nDimension 2\n", "t.mesh"), "Dimension 3", 2);
-  expect_error(parse_medit("MeshVersionFormatted 2\nVertices\n1\n0 0 0 0\n", "t.mesh"), "before 'Dimension 3'", 2);
-  expect_error(parse_medit(head + "Vertices\n1000000000000000000\n0 0 0 0\n", "t.mesh"), "section size", 4);
-  expect_error(parse_medit(head + "Vertices\n100000\n0 0 0 0\n", "t.mesh"), "larger than the", 4);
-  expect_error(parse_medit(head + "Vertices\n-1\n", "t.mesh"), "section size", 4);
-  expect_error(parse_medit(head + "Vertices\n2\n0 0 0 0\n0 0 # padding padding\n", "t.mesh"),
-               "file ends where vertex coordinate", 7);
-  expect_error(parse_medit(head + "Vertices\n1\n0 nan 0 0\n", "t.mesh"), "finite number", 5);
-  expect_error(parse_medit(verts + "Tetrahedra\n1\n1 2 3 5 0\n", "t.mesh"), "vertex index in [1, 4]", 11);
-  expect_error(parse_medit(verts + "Tetrahedra\n1\n1 2 0 4 0\n", "t.mesh"), "vertex index in [1, 4]", 11);
-  expect_error(parse_medit(verts + "Tetrahedra\n1\n1 2 -3 4 0\n", "t.mesh"), "vertex index in [1, 4]", 11);
-  expect_error(parse_medit(verts + "Tetrahedra\n3\n1 2 3 4 0\n", "t.mesh"), "larger than the", 10);
-  expect_error(parse_medit(verts + "Tetrahedra\n1\n1 2 3 4 # padding\n", "t.mesh"), "tetrahedron reference", 12);
-  expect_error(parse_medit(verts + "End\n", "t.mesh"), "without tetrahedra", 9);
-  expect_error(parse_medit(head + "End\n", "t.mesh"), "without a 'Vertices'", 3);
-  expect_error(parse_medit(head + "Tetrahedra\n1\n1 2 3 4 0\n", "t.mesh"), "before 'Vertices'", 3);
-  expect_error(parse_medit(verts + "Triangles\n1\n1 2 x 0\n", "t.mesh"), "expected number", 11);
-  expect_error(parse_medit(verts + "12 Tetrahedra\n", "t.mesh"), "expected a keyword", 9);
+  expect_medit_error(parse_medit("", "t.mesh"), "empty file", 1);
+  expect_medit_error(parse_medit("Dimension 3\n", "t.mesh"), "expected 'MeshVersionFormatted'", 1);
+  expect_medit_error(parse_medit("MeshVersionFormatted 7\n", "t.mesh"), "version", 1);
+  expect_medit_error(parse_medit("MeshVersionFormatted 2\nDimension 2\n", "t.mesh"), "Dimension 3", 2);
+  expect_medit_error(parse_medit("MeshVersionFormatted 2\nVertices\n1\n0 0 0 0\n", "t.mesh"), "before 'Dimension 3'",
+                     2);
+  expect_medit_error(parse_medit(head + "Vertices\n1000000000000000000\n0 0 0 0\n", "t.mesh"), "section size", 4);
+  expect_medit_error(parse_medit(head + "Vertices\n100000\n0 0 0 0\n", "t.mesh"), "larger than the", 4);
+  expect_medit_error(parse_medit(head + "Vertices\n-1\n", "t.mesh"), "section size", 4);
+  expect_medit_error(parse_medit(head + "Vertices\n2\n0 0 0 0\n0 0 # padding padding\n", "t.mesh"),
+                     "file ends where vertex coordinate", 7);
+  expect_medit_error(parse_medit(head + "Vertices\n1\n0 nan 0 0\n", "t.mesh"), "finite number", 5);
+  expect_medit_error(parse_medit(verts + "Tetrahedra\n1\n1 2 3 5 0\n", "t.mesh"), "vertex index in [1, 4]", 11);
+  expect_medit_error(parse_medit(verts + "Tetrahedra\n1\n1 2 0 4 0\n", "t.mesh"), "vertex index in [1, 4]", 11);
+  expect_medit_error(parse_medit(verts + "Tetrahedra\n1\n1 2 -3 4 0\n", "t.mesh"), "vertex index in [1, 4]", 11);
+  expect_medit_error(parse_medit(verts + "Tetrahedra\n3\n1 2 3 4 0\n", "t.mesh"), "larger than the", 10);
+  expect_medit_error(parse_medit(verts + "Tetrahedra\n1\n1 2 3 4 # padding\n", "t.mesh"), "tetrahedron reference", 12);
+  expect_medit_error(parse_medit(verts + "End\n", "t.mesh"), "without tetrahedra", 9);
+  expect_medit_error(parse_medit(head + "End\n", "t.mesh"), "without a 'Vertices'", 3);
+  expect_medit_error(parse_medit(head + "Tetrahedra\n1\n1 2 3 4 0\n", "t.mesh"), "before 'Vertices'", 3);
+  expect_medit_error(parse_medit(verts + "Triangles\n1\n1 2 x 0\n", "t.mesh"), "expected number", 11);
+  expect_medit_error(parse_medit(verts + "12 Tetrahedra\n", "t.mesh"), "expected a keyword", 9);
 }
 
 TEST(MeditWrite, RoundTripIsExact) {

@@ -23,7 +23,7 @@ bool have_meshio() {
   return ok;
 }
 
-TetMesh sample_mesh() {
+TetMesh meshio_sample() {
   return make_box_mesh(
       {.min = Vec3(-0.5, 0.1, 2), .max = Vec3(0.7, 1.3, 2.5), .cells = {2, 2, 1}, .jitter = 0.2, .seed = 5});
 }
@@ -54,7 +54,7 @@ const Case kCases[] = {
 TEST(Meshio, WeReadWhatMeshioWrites) {
   SHATTER_REQUIRE_TOOL(have_meshio(), "/usr/bin/python3 cannot import meshio");
   test::TempDir dir;
-  const TetMesh m = sample_mesh();
+  const TetMesh m = meshio_sample();
   nlohmann::json in;
   for (const Vec3& p : m.positions) in["points"].push_back({p.x(), p.y(), p.z()});
   for (const TetIndices& t : m.tets) in["tets"].push_back({t[0], t[1], t[2], t[3]});
@@ -78,7 +78,7 @@ TEST(Meshio, WeReadWhatMeshioWrites) {
 TEST(Meshio, MeshioReadsWhatWeWrite) {
   SHATTER_REQUIRE_TOOL(have_meshio(), "/usr/bin/python3 cannot import meshio");
   test::TempDir dir;
-  const TetMesh m = sample_mesh();
+  const TetMesh m = meshio_sample();
   struct Written {
     std::string file;
     bool binary = false;

@@ -17,7 +17,7 @@ namespace shatter {
 namespace {
 
 /// A jittered box with sparse, shuffled-looking ids and three regions.
-TetMesh sample_mesh(bool with_tags = true) {
+TetMesh msh_sample(bool with_tags = true) {
   TetMesh m =
       make_box_mesh({.min = Vec3(-1, 0.25, 3), .max = Vec3(1.5, 1, 4), .cells = {3, 2, 2}, .jitter = 0.2, .seed = 11});
   for (Index i = 0; i < m.num_nodes(); ++i) m.node_ids.push_back(1000 + 7 * FileId((i * 5) % m.num_nodes()));
@@ -49,7 +49,7 @@ void expect_same_mesh(const TetMesh& a, const TetMesh& b) {
 }
 
 TEST(MshRoundTrip, AsciiAndBinaryKeepEverythingBitExact) {
-  TetMesh m = sample_mesh();
+  TetMesh m = msh_sample();
   std::vector<Index> region4;
   for (Index e = 0; e < 20; ++e) region4.push_back(e);
   m.tet_sets["base plate"] = region4;
@@ -134,7 +134,7 @@ TEST(MshRead, Version41SparseTagsNoEntitiesCrlf) {
 }
 
 TEST(MshRead, Utf8BomIsSkipped) {
-  const std::string bytes = "\xEF\xBB\xBF" + write_to_string(sample_mesh(), false);
+  const std::string bytes = "\xEF\xBB\xBF" + write_to_string(msh_sample(), false);
   EXPECT_OK(parse_msh(bytes, "bom.msh"));
 }
 
@@ -197,7 +197,7 @@ TEST(MshRead, BinaryMarkerAndNonFiniteCoordinates) {
 
 TEST(MshRead, TruncatedRoundTripFilesFailCleanly) {
   for (bool binary : {false, true}) {
-    const std::string full = write_to_string(sample_mesh(), binary);
+    const std::string full = write_to_string(msh_sample(), binary);
     // Every prefix that cuts a section short fails (step keeps the test fast).
     for (std::size_t n = 0; n + 14 < full.size(); n += 7) {
       const Result<MeshReadResult> r = parse_msh(full.substr(0, n), "t.msh");

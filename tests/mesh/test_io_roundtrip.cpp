@@ -9,7 +9,7 @@
 namespace shatter {
 namespace {
 
-TetMesh sample_mesh() {
+TetMesh roundtrip_sample() {
   TetMesh m = make_box_mesh(
       {.min = Vec3(-0.5, 0.1, 2), .max = Vec3(0.7, 1.3, 2.01), .cells = {3, 2, 2}, .jitter = 0.2, .seed = 3});
   for (Index i = 0; i < m.num_nodes(); ++i) m.node_ids.push_back(FileId(2 * i + 1));
@@ -24,7 +24,7 @@ struct Holds {
 
 TEST(MeshRoundTrip, EveryVolumeFormat) {
   test::TempDir dir;
-  const TetMesh m = sample_mesh();
+  const TetMesh m = roundtrip_sample();
   for (const Holds& h : {Holds{"a.msh", true}, Holds{"a.node", true}, Holds{"b.ele", true}, Holds{"a.vtk", false},
                          Holds{"a.vtu", false}, Holds{"a.mesh", false}, Holds{"a.inp", true}}) {
     SCOPED_TRACE(h.file);
@@ -51,7 +51,7 @@ TEST(MeshRoundTrip, EveryVolumeFormat) {
 // writers number 1..n with a warning instead of failing after the input was read.
 TEST(MeshRoundTrip, IdsThatAreNotPositiveAreRenumbered) {
   test::TempDir dir;
-  TetMesh m = sample_mesh();
+  TetMesh m = roundtrip_sample();
   for (Index i = 0; i < m.num_nodes(); ++i) m.node_ids[static_cast<std::size_t>(i)] = i;
   for (Index e = 0; e < m.num_tets(); ++e) m.tet_ids[static_cast<std::size_t>(e)] = e;
   for (const char* file : {"z.msh", "z.inp"}) {
@@ -70,7 +70,7 @@ TEST(MeshRoundTrip, IdsThatAreNotPositiveAreRenumbered) {
 
 TEST(MeshRoundTrip, TagsAndSetsWhereHeld) {
   test::TempDir dir;
-  TetMesh m = sample_mesh();
+  TetMesh m = roundtrip_sample();
   m.tet_tags.assign(m.tets.size(), 4);
   m.tet_tags[3] = 9;
   m.node_tags.assign(m.positions.size(), 1);
@@ -82,7 +82,7 @@ TEST(MeshRoundTrip, TagsAndSetsWhereHeld) {
     EXPECT_EQ(r->mesh.tet_tags, m.tet_tags) << f;
     EXPECT_EQ(r->mesh.node_tags, m.node_tags) << f;
   }
-  TetMesh s = sample_mesh();
+  TetMesh s = roundtrip_sample();
   s.node_sets["BOTTOM"] = {0, 1, 2, 3};
   s.tet_sets["LEFT"] = {0, 2};
   ASSERT_OK(write_mesh(dir.file("s.inp"), s));
@@ -93,7 +93,7 @@ TEST(MeshRoundTrip, TagsAndSetsWhereHeld) {
 
 TEST(MeshRoundTrip, InvertedTetsAreRepairedWithAWarning) {
   test::TempDir dir;
-  TetMesh m = sample_mesh();
+  TetMesh m = roundtrip_sample();
   std::swap(m.tets[0][0], m.tets[0][1]);
   ASSERT_OK(write_mesh(dir.file("inv.inp"), m));
   test::ExpectWarnings warnings;
@@ -106,7 +106,7 @@ TEST(MeshRoundTrip, InvertedTetsAreRepairedWithAWarning) {
 
 TEST(SurfaceRoundTrip, EveryFormat) {
   test::TempDir dir;
-  const TriSurface s = boundary_surface(sample_mesh());
+  const TriSurface s = boundary_surface(roundtrip_sample());
   for (const char* f : {"s.obj", "s.ply", "s.stl"})
     for (bool binary : {false, true}) {
       if (std::string(f) == "s.obj" && binary) continue;

@@ -11,8 +11,8 @@
 namespace shatter {
 namespace {
 
-void expect_error(const Result<SurfaceReadResult>& r, const std::string& substring, std::int64_t line,
-                  std::int64_t offset = -1) {
+void expect_surface_error(const Result<SurfaceReadResult>& r, const std::string& substring, std::int64_t line,
+                          std::int64_t offset = -1) {
   test::expect_read_error(r, substring, line, "", offset);
 }
 
@@ -50,13 +50,13 @@ TEST(ObjRead, FormsNegativeIndicesAndPolygons) {
 }
 
 TEST(ObjRead, Malformed) {
-  expect_error(parse_obj("v 0 0\n", "t.obj"), "v x y z", 1);
-  expect_error(parse_obj("v 0 0 nan\n", "t.obj"), "finite number", 1);
-  expect_error(parse_obj("\xEF\xBB\xBFv 0 0 0\r\nf 1 2 3\r\n", "t.obj"), "there are 1 vertices", 2);
-  expect_error(parse_obj("v 0 0 0\nf 1 0 1\n", "t.obj"), "non-zero integer", 2);
-  expect_error(parse_obj("v 0 0 0\nf 1 -2 1\n", "t.obj"), "before the first vertex", 2);
-  expect_error(parse_obj("v 0 0 0\nf 1 1000000000000000000 1\n", "t.obj"), "there are 1 vertices", 2);
-  expect_error(parse_obj("v 0 0 0\nf 1 x 1\n", "t.obj"), "vertex index", 2);
+  expect_surface_error(parse_obj("v 0 0\n", "t.obj"), "v x y z", 1);
+  expect_surface_error(parse_obj("v 0 0 nan\n", "t.obj"), "finite number", 1);
+  expect_surface_error(parse_obj("\xEF\xBB\xBFv 0 0 0\r\nf 1 2 3\r\n", "t.obj"), "there are 1 vertices", 2);
+  expect_surface_error(parse_obj("v 0 0 0\nf 1 0 1\n", "t.obj"), "non-zero integer", 2);
+  expect_surface_error(parse_obj("v 0 0 0\nf 1 -2 1\n", "t.obj"), "before the first vertex", 2);
+  expect_surface_error(parse_obj("v 0 0 0\nf 1 1000000000000000000 1\n", "t.obj"), "there are 1 vertices", 2);
+  expect_surface_error(parse_obj("v 0 0 0\nf 1 x 1\n", "t.obj"), "vertex index", 2);
   auto empty = parse_obj("", "t.obj");
   ASSERT_OK(empty);
   EXPECT_TRUE(empty->surface.positions.empty());
@@ -99,25 +99,27 @@ TEST(PlyRead, Malformed) {
   const std::string h =
       "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
       "element face 1\nproperty list uchar int vertex_indices\nend_header\n";  // 9 lines
-  expect_error(parse_ply("", "t.ply"), "empty file", 1);
-  expect_error(parse_ply("plx\n", "t.ply"), "expected 'ply'", 1);
-  expect_error(parse_ply("ply\nformat ascii 1.0\n", "t.ply"), "before 'end_header'", 3);
-  expect_error(parse_ply("ply\nformat foo 1.0\nend_header\n", "t.ply"), "unknown PLY format", 2);
-  expect_error(parse_ply("ply\nend_header\n", "t.ply"), "no 'format'", 3);
-  expect_error(parse_ply("ply\nformat ascii 1.0\nelement vertex -1\nend_header\n", "t.ply"), "element count", 3);
-  expect_error(
+  expect_surface_error(parse_ply("", "t.ply"), "empty file", 1);
+  expect_surface_error(parse_ply("plx\n", "t.ply"), "expected 'ply'", 1);
+  expect_surface_error(parse_ply("ply\nformat ascii 1.0\n", "t.ply"), "before 'end_header'", 3);
+  expect_surface_error(parse_ply("ply\nformat foo 1.0\nend_header\n", "t.ply"), "unknown PLY format", 2);
+  expect_surface_error(parse_ply("ply\nend_header\n", "t.ply"), "no 'format'", 3);
+  expect_surface_error(parse_ply("ply\nformat ascii 1.0\nelement vertex -1\nend_header\n", "t.ply"), "element count",
+                       3);
+  expect_surface_error(
       parse_ply("ply\nformat ascii 1.0\nelement vertex 1000000000000000000\nproperty float x\nproperty float y\n"
                 "property float z\nend_header\n0 0 0\n",
                 "t.ply"),
       "larger than the", 3);
-  expect_error(parse_ply("ply\nformat ascii 1.0\nelement vertex 5\nend_header\n", "t.ply"), "no properties", 3);
-  expect_error(parse_ply("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n", "t.ply"),
-               "x, y and z", 3);
-  expect_error(parse_ply("ply\nformat ascii 1.0\nelement vertex 1\nproperty quad x\n", "t.ply"), "unknown PLY type", 4);
-  expect_error(parse_ply(h + "0 0 0\n1 0 0\n0 1 nan\n3 0 1 2\n", "t.ply"), "finite number", 12);
-  expect_error(parse_ply(h + "0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", "t.ply"), "there are 3 vertices", 13);
-  expect_error(parse_ply(h + "0 0 0\n1 0 0\n0 1 0\n3 0 1 -1\n", "t.ply"), "there are 3 vertices", 13);
-  expect_error(parse_ply(h + "0 0 0\n1 0 0\n0 1 0\n200 0 1 2\n", "t.ply"), "list length 200", 13);
+  expect_surface_error(parse_ply("ply\nformat ascii 1.0\nelement vertex 5\nend_header\n", "t.ply"), "no properties", 3);
+  expect_surface_error(parse_ply("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n", "t.ply"),
+                       "x, y and z", 3);
+  expect_surface_error(parse_ply("ply\nformat ascii 1.0\nelement vertex 1\nproperty quad x\n", "t.ply"),
+                       "unknown PLY type", 4);
+  expect_surface_error(parse_ply(h + "0 0 0\n1 0 0\n0 1 nan\n3 0 1 2\n", "t.ply"), "finite number", 12);
+  expect_surface_error(parse_ply(h + "0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", "t.ply"), "there are 3 vertices", 13);
+  expect_surface_error(parse_ply(h + "0 0 0\n1 0 0\n0 1 0\n3 0 1 -1\n", "t.ply"), "there are 3 vertices", 13);
+  expect_surface_error(parse_ply(h + "0 0 0\n1 0 0\n0 1 0\n200 0 1 2\n", "t.ply"), "list length 200", 13);
   // Binary: a list length larger than the bytes left, reported by byte offset.
   std::string bin =
       "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty list int double x\nproperty float y\n"
@@ -126,7 +128,7 @@ TEST(PlyRead, Malformed) {
   const std::int32_t huge = 1000000000;
   bin.append(reinterpret_cast<const char*>(&huge), 4);
   bin.append(8, '\0');
-  expect_error(parse_ply(bin, "t.ply"), "must not be a list", 3);
+  expect_surface_error(parse_ply(bin, "t.ply"), "must not be a list", 3);
   std::string bin2 =
       "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty double x\nproperty double y\n"
       "property double z\nend_header\n";
@@ -135,7 +137,7 @@ TEST(PlyRead, Malformed) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   bin2.append(reinterpret_cast<const char*>(&nan), 8);
   bin2.append(16, '\0');
-  expect_error(parse_ply(bin2, "t.ply"), "finite number", -1, static_cast<std::int64_t>(start2 + 32));
+  expect_surface_error(parse_ply(bin2, "t.ply"), "finite number", -1, static_cast<std::int64_t>(start2 + 32));
   (void)start;
 }
 
@@ -167,21 +169,22 @@ TEST(StlRead, AsciiPolygonsWeldingAndBinaryStartingWithSolid) {
 }
 
 TEST(StlRead, Malformed) {
-  expect_error(parse_stl("", "t.stl"), "neither ASCII STL", -1, 0);
-  expect_error(parse_stl("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0\n", "t.stl"),
-               "vertex coordinate", 6);
-  expect_error(parse_stl("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 inf\n", "t.stl"), "finite number", 4);
-  expect_error(
+  expect_surface_error(parse_stl("", "t.stl"), "neither ASCII STL", -1, 0);
+  expect_surface_error(parse_stl("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0\n", "t.stl"),
+                       "vertex coordinate", 6);
+  expect_surface_error(parse_stl("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 inf\n", "t.stl"), "finite number",
+                       4);
+  expect_surface_error(
       parse_stl("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\nendfacet\nendsolid\n",
                 "t.stl"),
       "at least 3 vertices", 7);
-  expect_error(parse_stl("solid x\nfacet normal 0 0 1\nouter hoop\n", "t.stl"), "expected 'loop'", 3);
-  expect_error(parse_stl("solid x\n", "t.stl"), "file ends inside a solid", 2);
+  expect_surface_error(parse_stl("solid x\nfacet normal 0 0 1\nouter hoop\n", "t.stl"), "expected 'loop'", 3);
+  expect_surface_error(parse_stl("solid x\n", "t.stl"), "file ends inside a solid", 2);
   std::string bin(80, 'x');
   const std::uint32_t n = 4000000000u;
   bin.append(reinterpret_cast<const char*>(&n), 4);
   bin.append(50, '\0');
-  expect_error(parse_stl(bin, "t.stl"), "only 50 remain", -1, 84);
+  expect_surface_error(parse_stl(bin, "t.stl"), "only 50 remain", -1, 84);
   std::string nan_bin(80, 'x');
   const std::uint32_t one = 1;
   nan_bin.append(reinterpret_cast<const char*>(&one), 4);
@@ -189,7 +192,7 @@ TEST(StlRead, Malformed) {
   f[7] = std::numeric_limits<float>::quiet_NaN();
   nan_bin.append(reinterpret_cast<const char*>(f), 48);
   nan_bin.append(2, '\0');
-  expect_error(parse_stl(nan_bin, "t.stl"), "finite number", -1, 84 + 28);
+  expect_surface_error(parse_stl(nan_bin, "t.stl"), "finite number", -1, 84 + 28);
 }
 
 TEST(SurfaceWrite, RoundTripsAreExact) {

@@ -10,8 +10,8 @@
 namespace shatter {
 namespace {
 
-void expect_error(const Result<MeshReadResult>& r, const std::string& substring, std::int64_t line,
-                  const std::string& file = "") {
+void expect_tetgen_error(const Result<MeshReadResult>& r, const std::string& substring, std::int64_t line,
+                         const std::string& file = "") {
   test::expect_read_error(r, substring, line, file);
 }
 
@@ -78,35 +78,37 @@ TEST(TetgenRead, QuadraticTetsKeepCorners) {
 TEST(TetgenRead, Malformed) {
   const std::string ele = "1 4 0\n1 1 2 3 4\n";
   const std::string node4 = "4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n";
-  expect_error(parse_tetgen("", "n", ele, "e"), "empty file", 1, "n");
-  expect_error(parse_tetgen("# only a comment\n", "n", ele, "e"), "empty file", 2, "n");
-  expect_error(parse_tetgen(node4, "n", "", "e"), "empty file", 1, "e");
-  expect_error(parse_tetgen("4 3 0 0\n1 0 0 0\n2 1 0 0\n", "n", ele, "e"), "larger than the", 1);
-  expect_error(
+  expect_tetgen_error(parse_tetgen("", "n", ele, "e"), "empty file", 1, "n");
+  expect_tetgen_error(parse_tetgen("# only a comment\n", "n", ele, "e"), "empty file", 2, "n");
+  expect_tetgen_error(parse_tetgen(node4, "n", "", "e"), "empty file", 1, "e");
+  expect_tetgen_error(parse_tetgen("4 3 0 0\n1 0 0 0\n2 1 0 0\n", "n", ele, "e"), "larger than the", 1);
+  expect_tetgen_error(
       parse_tetgen("4 3 0 0\n1 0 0 0\n2 1 0 0 # a comment that is long enough to pass the check\n", "n", ele, "e"),
       "file ends after 2 of 4 points", 4);
-  expect_error(parse_tetgen("1000000000000000000 3 0 0\n1 0 0 0\n", "n", ele, "e"), "point count", 1);
-  expect_error(parse_tetgen("2000000 3 0 0\n1 0 0 0\n", "n", ele, "e"), "larger than the", 1);
-  expect_error(parse_tetgen("4 3 1000000000000000000 0\n", "n", ele, "e"), "attribute count", 1);
-  expect_error(parse_tetgen("-4 3 0 0\n", "n", ele, "e"), "point count", 1);
-  expect_error(parse_tetgen("4 2 0 0\n", "n", ele, "e"), "dimension", 1);
-  expect_error(parse_tetgen("4 3 0 0\n1 0 0 0\n2 nan 0 0\n3 0 1 0\n4 0 0 1\n", "n", ele, "e"), "finite number", 3);
-  expect_error(parse_tetgen("4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 # short row\n4 0 0 1\n", "n", ele, "e"),
-               "line ends where coordinate", 4);
-  expect_error(parse_tetgen("4 3 0 0\n1 0 0 0\n1 1 0 0\n3 0 1 0\n4 0 0 1\n", "n", ele, "e"), "defined twice", 3);
-  expect_error(parse_tetgen("4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1 8\n", "n", ele, "e"), "unexpected '8'", 5);
-  expect_error(parse_tetgen(node4 + "5 1 1 1\n", "n", ele, "e"), "after the 4 points", 6);
-  expect_error(parse_tetgen(node4, "n", "1 4 0\n1 1 2 3 5\n", "e"), "uses point 5", 2, "e");
+  expect_tetgen_error(parse_tetgen("1000000000000000000 3 0 0\n1 0 0 0\n", "n", ele, "e"), "point count", 1);
+  expect_tetgen_error(parse_tetgen("2000000 3 0 0\n1 0 0 0\n", "n", ele, "e"), "larger than the", 1);
+  expect_tetgen_error(parse_tetgen("4 3 1000000000000000000 0\n", "n", ele, "e"), "attribute count", 1);
+  expect_tetgen_error(parse_tetgen("-4 3 0 0\n", "n", ele, "e"), "point count", 1);
+  expect_tetgen_error(parse_tetgen("4 2 0 0\n", "n", ele, "e"), "dimension", 1);
+  expect_tetgen_error(parse_tetgen("4 3 0 0\n1 0 0 0\n2 nan 0 0\n3 0 1 0\n4 0 0 1\n", "n", ele, "e"), "finite number",
+                      3);
+  expect_tetgen_error(parse_tetgen("4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 # short row\n4 0 0 1\n", "n", ele, "e"),
+                      "line ends where coordinate", 4);
+  expect_tetgen_error(parse_tetgen("4 3 0 0\n1 0 0 0\n1 1 0 0\n3 0 1 0\n4 0 0 1\n", "n", ele, "e"), "defined twice", 3);
+  expect_tetgen_error(parse_tetgen("4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1 8\n", "n", ele, "e"), "unexpected '8'",
+                      5);
+  expect_tetgen_error(parse_tetgen(node4 + "5 1 1 1\n", "n", ele, "e"), "after the 4 points", 6);
+  expect_tetgen_error(parse_tetgen(node4, "n", "1 4 0\n1 1 2 3 5\n", "e"), "uses point 5", 2, "e");
   // Found by fuzzing: a huge region attribute must be refused before any integer conversion.
-  expect_error(parse_tetgen(node4, "n", "1 4 1\n1 1 2 3 4 1e111\n", "e"), "32-bit integer", 2, "e");
-  expect_error(parse_tetgen(node4, "n", "1 4 1\n1 1 2 3 4 -3e9\n", "e"), "32-bit integer", 2, "e");
-  expect_error(parse_tetgen(node4, "n", "1 4 1\n1 1 2 3 4 2.5\n", "e"), "32-bit integer", 2, "e");
-  expect_error(parse_tetgen(node4, "n", "1 4 0\n1 1 2 3 -1\n", "e"), "uses point -1", 2, "e");
-  expect_error(parse_tetgen(node4, "n", "3 4 0\n1 1 2 3 4\n", "e"), "larger than the", 1, "e");
-  expect_error(parse_tetgen(node4, "n", "2 4 0\n1 1 2 3 4\n# padding\n", "e"), "file ends after 1 of 2", 4, "e");
-  expect_error(parse_tetgen(node4, "n", "1 5 0\n1 1 2 3 4 4\n", "e"), "4 or 10", 1, "e");
-  expect_error(parse_tetgen(node4, "n", "1 4 1\n1 1 2 3 4 1.5\n", "e"), "32-bit integer", 2, "e");
-  expect_error(parse_tetgen(node4, "n", "1 4 0\n1 1 2 3 x\n", "e"), "expected node number", 2, "e");
+  expect_tetgen_error(parse_tetgen(node4, "n", "1 4 1\n1 1 2 3 4 1e111\n", "e"), "32-bit integer", 2, "e");
+  expect_tetgen_error(parse_tetgen(node4, "n", "1 4 1\n1 1 2 3 4 -3e9\n", "e"), "32-bit integer", 2, "e");
+  expect_tetgen_error(parse_tetgen(node4, "n", "1 4 1\n1 1 2 3 4 2.5\n", "e"), "32-bit integer", 2, "e");
+  expect_tetgen_error(parse_tetgen(node4, "n", "1 4 0\n1 1 2 3 -1\n", "e"), "uses point -1", 2, "e");
+  expect_tetgen_error(parse_tetgen(node4, "n", "3 4 0\n1 1 2 3 4\n", "e"), "larger than the", 1, "e");
+  expect_tetgen_error(parse_tetgen(node4, "n", "2 4 0\n1 1 2 3 4\n# padding\n", "e"), "file ends after 1 of 2", 4, "e");
+  expect_tetgen_error(parse_tetgen(node4, "n", "1 5 0\n1 1 2 3 4 4\n", "e"), "4 or 10", 1, "e");
+  expect_tetgen_error(parse_tetgen(node4, "n", "1 4 1\n1 1 2 3 4 1.5\n", "e"), "32-bit integer", 2, "e");
+  expect_tetgen_error(parse_tetgen(node4, "n", "1 4 0\n1 1 2 3 x\n", "e"), "expected node number", 2, "e");
 }
 
 TEST(TetgenWrite, RoundTripIsExact) {

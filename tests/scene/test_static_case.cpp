@@ -289,19 +289,8 @@ TEST(StaticCase, ResolveErrorsNameTheField) {
 
 // --- `shatter static` end to end -------------------------------------------------------------
 
-std::string read_text(const std::filesystem::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::vector<std::string> lines_of(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream s(text);
-  for (std::string line; std::getline(s, line);) out.push_back(line);
-  return out;
-}
+using test::lines_of;
+using test::read_text;
 
 struct CliFixture {
   test::TempDir dir;

@@ -27,19 +27,8 @@ namespace fs = std::filesystem;
 
 const std::string kExamples = std::string(SHATTER_SOURCE_DIR) + "/examples/";
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::vector<std::string> lines_of(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream s(text);
-  for (std::string line; std::getline(s, line);) out.push_back(line);
-  return out;
-}
+using test::lines_of;
+using test::read_text;
 
 std::string write_case(const test::TempDir& dir, const std::string& name, const std::string& text) {
   const std::string p = dir.file(name);

@@ -4,8 +4,10 @@
 #include <unistd.h>
 #include <array>
 #include <cstdio>
+#include <fstream>
 #include <map>
 #include <mutex>
+#include <sstream>
 
 #include "shatter/core/log.h"
 
@@ -53,6 +55,20 @@ TempDir::~TempDir() {
 }
 
 std::string data_path(const std::string& relative) { return std::string(SHATTER_TEST_DATA_DIR) + "/" + relative; }
+
+std::string read_text(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream s(text);
+  for (std::string line; std::getline(s, line);) out.push_back(line);
+  return out;
+}
 
 CommandResult run_command(const std::string& command, bool merge_stderr) {
   CommandResult r;

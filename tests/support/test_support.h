@@ -75,6 +75,15 @@ CommandResult run_command(const std::string& command, bool merge_stderr = false)
 /// Path to the built `shatter` executable.
 std::string cli_path();
 
+/// A path or argument in single quotes for a shell command line (paths here have no quotes).
+inline std::string quoted(const std::string& s) { return "'" + s + "'"; }
+
+/// The whole file as bytes ("" when it cannot be read).
+std::string read_text(const std::filesystem::path& p);
+
+/// The lines of a text, without their line ends.
+std::vector<std::string> lines_of(const std::string& text);
+
 /// Check that a reader failed with a message containing `substring` at `line` (-1: no line);
 /// when given, also the byte `offset` and the `file` the error names.
 template <class T>

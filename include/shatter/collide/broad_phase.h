@@ -37,8 +37,11 @@ struct BroadPhaseStats {
 /// A box the grid takes in: not empty, with finite corners (the others are skipped).
 bool valid_box(const Aabb& b);
 
-/// Two boxes overlap (closed intervals: touching counts).
-bool boxes_overlap(const Aabb& a, const Aabb& b);
+/// Two boxes overlap (closed intervals: touching counts). Inline: the tet-contact traversal calls
+/// it per BVH node.
+inline bool boxes_overlap(const Aabb& a, const Aabb& b) {
+  return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
+}
 
 /// A pair of body indices, first < second.
 using BodyPair = std::pair<Index, Index>;

@@ -40,10 +40,6 @@ double median_extent(const std::vector<Aabb>& boxes) {
 
 bool valid_box(const Aabb& b) { return !b.empty() && b.min.allFinite() && b.max.allFinite(); }
 
-bool boxes_overlap(const Aabb& a, const Aabb& b) {
-  return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
-}
-
 const std::vector<BodyPair>& BroadPhase::find_pairs(const std::vector<Aabb>& boxes, const BroadPhaseOptions& options) {
   stats_ = {};
   pairs_.clear();

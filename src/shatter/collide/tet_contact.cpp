@@ -6,10 +6,11 @@
 #include <cmath>
 #include <limits>
 
+#include "shatter/collide/broad_phase.h"
+
 namespace shatter {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr int kLeafSize = 4;        // triangles per BVH leaf
 constexpr int kStackSize = 64;      // BVH traversal stack: depth of a median-split tree is ~log2(n)
 constexpr int kMaxCrossings = 32;   // segment-boundary crossings kept per edge (more are ignored)
@@ -26,10 +27,6 @@ Aabb padded(const Aabb& b, double r) {
 double box_distance_squared(const Aabb& b, const Vec3& p) {
   const Vec3 d = (b.min - p).cwiseMax(p - b.max).cwiseMax(0.0);
   return d.squaredNorm();
-}
-
-bool boxes_overlap(const Aabb& a, const Aabb& b) {
-  return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
 }
 
 // The map from a point to the barycentric coordinates 1..3 of tet e: with the edge vectors
@@ -285,7 +282,7 @@ Vec3 place(const Transform& t, const Vec3& p) {
 }
 
 // The relative placement of one body in the other's frame: local_b = rotation * local_a + translation.
-Transform relative(const Transform& from, const Transform& to) {
+Transform placement_in(const Transform& from, const Transform& to) {
   Transform r;
   r.rotation = to.rotation.transpose() * from.rotation;
   r.translation = to.rotation.transpose() * (from.translation - to.translation);
@@ -297,7 +294,7 @@ Transform relative(const Transform& from, const Transform& to) {
 bool point_contact(const TetContactShape& s, const Vec3& p, bool inside, double speculative, Vec3& point, Vec3& normal,
                    double& separation) {
   BoundaryPoint bp;
-  if (!closest_boundary_point(s, p, inside ? kInf : speculative, bp)) return false;
+  if (!closest_boundary_point(s, p, inside ? std::numeric_limits<double>::infinity() : speculative, bp)) return false;
   const Vec3& face_normal = s.triangle_normals[static_cast<std::size_t>(bp.triangle)];
   // Below this gap, p - q no longer gives a direction: use the face normal.
   const double tiny = 1e-9 * s.cell_size;
@@ -495,7 +492,7 @@ bool closest_boundary_point(const TetContactShape& shape, const Vec3& p, double 
 void collide_tet_shapes(const TetContactShape& a, const Transform& ta, const TetContactShape& b, const Transform& tb,
                         double speculative_distance, std::vector<PointContact>& out) {
   if (a.bounds.empty() || b.bounds.empty()) return;
-  const Transform ab = relative(ta, tb), ba = relative(tb, ta);
+  const Transform ab = placement_in(ta, tb), ba = placement_in(tb, ta);
   vertex_contacts(a, ab, b, tb, speculative_distance, false, out);
   vertex_contacts(b, ba, a, ta, speculative_distance, true, out);
   edge_contacts(a, ab, b, tb, false, out);

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "shatter/core/lanes.h"
 #include "shatter/core/parallel.h"
 #include "shatter/core/simd.h"
 
@@ -93,27 +94,28 @@ void build_blocks(FemModel& model) {
 // AVX2 versions give the same bits).
 // Vectors only live inside the force kernels (loads are built in place; the always-inlined helpers
 // take them by pointer), so none crosses a call by value; GCC's -Wpsabi warns about the call ABI of
-// such vectors.
+// such vectors. PlainLanes (core/lanes.h): these vectors never cross a call, so they need no
+// 32-byte alignment.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wpsabi"
-typedef double Lanes __attribute__((vector_size(4 * sizeof(double))));
 
 // The kernels' shared steps. Always inlined into each kernel (the AVX2 kernel then compiles them for
 // AVX2 too); they take vectors only by pointer.
 
 // Node n as (x, y, z, w), w meaningless: one 32-byte load that also reads the next node's x, except
 // for the last node, which has no next node.
-[[gnu::always_inline]] inline void load_node(const Vec3* x, std::int64_t last_node, Index n, Lanes* p) {
+[[gnu::always_inline]] inline void load_node(const Vec3* x, std::int64_t last_node, Index n, PlainLanes* p) {
   const double* q = x[n].data();
   if (n < last_node)
-    std::memcpy(p, q, sizeof(Lanes));
+    std::memcpy(p, q, sizeof(PlainLanes));
   else
-    *p = Lanes{q[0], q[1], q[2], 0.0};
+    *p = PlainLanes{q[0], q[1], q[2], 0.0};
 }
 
 // r = a0 b0 + a1 b1 + a2 b2 per lane, left to right.
-[[gnu::always_inline]] inline void lane_dot3(const Lanes& a0, const Lanes& a1, const Lanes& a2, const Lanes& b0,
-                                             const Lanes& b1, const Lanes& b2, Lanes* r) {
+[[gnu::always_inline]] inline void lane_dot3(const PlainLanes& a0, const PlainLanes& a1, const PlainLanes& a2,
+                                             const PlainLanes& b0, const PlainLanes& b1, const PlainLanes& b2,
+                                             PlainLanes* r) {
   *r = a0 * b0 + a1 * b1 + a2 * b2;
 }
 
@@ -121,12 +123,12 @@ typedef double Lanes __attribute__((vector_size(4 * sizeof(double))));
 // d[3 (k - 1) + axis]; padding lanes (from `lanes` on) repeat the first tet. Each lane's edge is
 // formed as (x, y, z, w) and the three are transposed to one vector per axis.
 [[gnu::always_inline]] inline void load_edges(const TetIndices* tets, const Vec3* x, std::int64_t last_node,
-                                              std::int64_t g0, int lanes, Lanes* d) {
-  Lanes e[3][4];  // [edge][lane]: (x, y, z, w)
+                                              std::int64_t g0, int lanes, PlainLanes* d) {
+  PlainLanes e[3][4];  // [edge][lane]: (x, y, z, w)
 #pragma GCC unroll 4
   for (int l = 0; l < 4; ++l) {
     const TetIndices& t = tets[g0 + (l < lanes ? l : 0)];
-    Lanes p0{}, pk{};  // set by load_node (GCC cannot see through its memcpy)
+    PlainLanes p0{}, pk{};  // set by load_node (GCC cannot see through its memcpy)
     load_node(x, last_node, t[0], &p0);
 #pragma GCC unroll 4
     for (int k = 1; k < 4; ++k) {
@@ -136,10 +138,10 @@ typedef double Lanes __attribute__((vector_size(4 * sizeof(double))));
   }
 #pragma GCC unroll 4
   for (int k = 0; k < 3; ++k) {
-    const Lanes xz01 = __builtin_shufflevector(e[k][0], e[k][1], 0, 4, 2, 6);  // x0 x1 z0 z1
-    const Lanes yw01 = __builtin_shufflevector(e[k][0], e[k][1], 1, 5, 3, 7);  // y0 y1 w0 w1
-    const Lanes xz23 = __builtin_shufflevector(e[k][2], e[k][3], 0, 4, 2, 6);
-    const Lanes yw23 = __builtin_shufflevector(e[k][2], e[k][3], 1, 5, 3, 7);
+    const PlainLanes xz01 = __builtin_shufflevector(e[k][0], e[k][1], 0, 4, 2, 6);  // x0 x1 z0 z1
+    const PlainLanes yw01 = __builtin_shufflevector(e[k][0], e[k][1], 1, 5, 3, 7);  // y0 y1 w0 w1
+    const PlainLanes xz23 = __builtin_shufflevector(e[k][2], e[k][3], 0, 4, 2, 6);
+    const PlainLanes yw23 = __builtin_shufflevector(e[k][2], e[k][3], 1, 5, 3, 7);
     d[3 * k] = __builtin_shufflevector(xz01, xz23, 0, 1, 4, 5);
     d[3 * k + 1] = __builtin_shufflevector(yw01, yw23, 0, 1, 4, 5);
     d[3 * k + 2] = __builtin_shufflevector(xz01, xz23, 2, 3, 6, 7);
@@ -148,16 +150,16 @@ typedef double Lanes __attribute__((vector_size(4 * sizeof(double))));
 
 // Add the corner forces out[3 k + axis] (one lane per tet) into the block's slots (x, y, z, 0 each),
 // in tet order: each lane's corner force is transposed to (fx, fy, fz, 0) and added as one vector.
-[[gnu::always_inline]] inline void scatter_corner_forces(const Lanes* out, const std::int32_t* corner_slot,
+[[gnu::always_inline]] inline void scatter_corner_forces(const PlainLanes* out, const std::int32_t* corner_slot,
                                                          std::int64_t g0, int lanes, double* slots) {
-  const Lanes zero = Lanes{0, 0, 0, 0};
-  Lanes f[4][4];  // [lane][corner]: (fx, fy, fz, 0)
+  const PlainLanes zero = PlainLanes{0, 0, 0, 0};
+  PlainLanes f[4][4];  // [lane][corner]: (fx, fy, fz, 0)
 #pragma GCC unroll 4
   for (int k = 0; k < 4; ++k) {
-    const Lanes xy02 = __builtin_shufflevector(out[3 * k], out[3 * k + 1], 0, 4, 2, 6);  // x0 y0 x2 y2
-    const Lanes xy13 = __builtin_shufflevector(out[3 * k], out[3 * k + 1], 1, 5, 3, 7);  // x1 y1 x3 y3
-    const Lanes z02 = __builtin_shufflevector(out[3 * k + 2], zero, 0, 4, 2, 6);         // z0 0 z2 0
-    const Lanes z13 = __builtin_shufflevector(out[3 * k + 2], zero, 1, 5, 3, 7);         // z1 0 z3 0
+    const PlainLanes xy02 = __builtin_shufflevector(out[3 * k], out[3 * k + 1], 0, 4, 2, 6);  // x0 y0 x2 y2
+    const PlainLanes xy13 = __builtin_shufflevector(out[3 * k], out[3 * k + 1], 1, 5, 3, 7);  // x1 y1 x3 y3
+    const PlainLanes z02 = __builtin_shufflevector(out[3 * k + 2], zero, 0, 4, 2, 6);         // z0 0 z2 0
+    const PlainLanes z13 = __builtin_shufflevector(out[3 * k + 2], zero, 1, 5, 3, 7);         // z1 0 z3 0
     f[0][k] = __builtin_shufflevector(xy02, z02, 0, 1, 4, 5);
     f[1][k] = __builtin_shufflevector(xy13, z13, 0, 1, 4, 5);
     f[2][k] = __builtin_shufflevector(xy02, z02, 2, 3, 6, 7);
@@ -169,41 +171,38 @@ typedef double Lanes __attribute__((vector_size(4 * sizeof(double))));
 #pragma GCC unroll 4
     for (int k = 0; k < 4; ++k) {
       double* s = slots + cs[k];
-      Lanes sum;
-      std::memcpy(&sum, s, sizeof(Lanes));
+      PlainLanes sum;
+      std::memcpy(&sum, s, sizeof(PlainLanes));
       sum += f[l][k];
-      std::memcpy(s, &sum, sizeof(Lanes));
+      std::memcpy(s, &sum, sizeof(PlainLanes));
     }
   }
 }
-
-// Lane-wise comparisons give a mask of 0 / -1 per lane.
-typedef long long LaneMask __attribute__((vector_size(4 * sizeof(long long))));
 
 // Lane-wise max and square root; a and b are plain names (each is read more than once). Macros, as
 // no helper here returns a vector by value (see above).
 #define SHATTER_LANE_MAX(a, b) ((a) > (b) ? (a) : (b))
 #define SHATTER_LANE_SQRT(a) \
-  Lanes { std::sqrt((a)[0]), std::sqrt((a)[1]), std::sqrt((a)[2]), std::sqrt((a)[3]) }
+  PlainLanes { std::sqrt((a)[0]), std::sqrt((a)[1]), std::sqrt((a)[2]), std::sqrt((a)[3]) }
 
 // m = max_ij |a_ij - b_ij| of two 3x3 matrices (row-major, nine lane vectors each).
-[[gnu::always_inline]] inline void lane_max_abs_difference(const Lanes* a, const Lanes* b, Lanes* m) {
-  *m = Lanes{0, 0, 0, 0};
+[[gnu::always_inline]] inline void lane_max_abs_difference(const PlainLanes* a, const PlainLanes* b, PlainLanes* m) {
+  *m = PlainLanes{0, 0, 0, 0};
   for (int i = 0; i < 9; ++i) {
-    const Lanes d = a[i] - b[i];
-    const Lanes nd = -d;
-    const Lanes ad = SHATTER_LANE_MAX(d, nd);
+    const PlainLanes d = a[i] - b[i];
+    const PlainLanes nd = -d;
+    const PlainLanes ad = SHATTER_LANE_MAX(d, nd);
     *m = SHATTER_LANE_MAX(*m, ad);
   }
 }
 // y = x^-T of a 3x3 matrix per lane (row-major) and det x: with a, b, c the columns of x,
 // x^-T = [b x c, c x a, a x b] / det.
-[[gnu::always_inline]] inline void lane_inverse_transpose(const Lanes* x, Lanes* y, Lanes* det) {
-  const Lanes bc0 = x[4] * x[8] - x[7] * x[5], bc1 = x[7] * x[2] - x[1] * x[8], bc2 = x[1] * x[5] - x[4] * x[2];
-  const Lanes ca0 = x[5] * x[6] - x[8] * x[3], ca1 = x[8] * x[0] - x[2] * x[6], ca2 = x[2] * x[3] - x[5] * x[0];
-  const Lanes ab0 = x[3] * x[7] - x[6] * x[4], ab1 = x[6] * x[1] - x[0] * x[7], ab2 = x[0] * x[4] - x[3] * x[1];
+[[gnu::always_inline]] inline void lane_inverse_transpose(const PlainLanes* x, PlainLanes* y, PlainLanes* det) {
+  const PlainLanes bc0 = x[4] * x[8] - x[7] * x[5], bc1 = x[7] * x[2] - x[1] * x[8], bc2 = x[1] * x[5] - x[4] * x[2];
+  const PlainLanes ca0 = x[5] * x[6] - x[8] * x[3], ca1 = x[8] * x[0] - x[2] * x[6], ca2 = x[2] * x[3] - x[5] * x[0];
+  const PlainLanes ab0 = x[3] * x[7] - x[6] * x[4], ab1 = x[6] * x[1] - x[0] * x[7], ab2 = x[0] * x[4] - x[3] * x[1];
   *det = x[0] * bc0 + x[3] * bc1 + x[6] * bc2;
-  const Lanes inv = 1.0 / *det;
+  const PlainLanes inv = 1.0 / *det;
   y[0] = bc0 * inv, y[1] = ca0 * inv, y[2] = ab0 * inv;
   y[3] = bc1 * inv, y[4] = ca1 * inv, y[5] = ab1 * inv;
   y[6] = bc2 * inv, y[7] = ca2 * inv, y[8] = ab2 * inv;
@@ -216,31 +215,31 @@ typedef long long LaneMask __attribute__((vector_size(4 * sizeof(long long))));
 // round-off. A lane that is inverted, nearly singular (det F below 1e-6 of max|F|^3) or not
 // converged in 30 steps gets polar_decomposition's answer (SVD where Newton cannot), so each lane's
 // R is a rotation. Deterministic: a lane's steps depend on its group of four, which is fixed.
-// Lanes from `lanes` on are padding: left as they come.
-[[gnu::always_inline]] inline void lane_polar_rotation(const Lanes* F, int lanes, Lanes* R) {
-  Lanes scale = Lanes{0, 0, 0, 0};
+// PlainLanes from `lanes` on are padding: left as they come.
+[[gnu::always_inline]] inline void lane_polar_rotation(const PlainLanes* F, int lanes, PlainLanes* R) {
+  PlainLanes scale = PlainLanes{0, 0, 0, 0};
   for (int i = 0; i < 9; ++i) {
-    const Lanes nf = -F[i];
-    const Lanes af = SHATTER_LANE_MAX(F[i], nf);
+    const PlainLanes nf = -F[i];
+    const PlainLanes af = SHATTER_LANE_MAX(F[i], nf);
     scale = SHATTER_LANE_MAX(scale, af);
   }
-  Lanes X[9], Y[9], det;
+  PlainLanes X[9], Y[9], det;
   for (int i = 0; i < 9; ++i) X[i] = F[i];
-  LaneMask ok{};
+  PlainLaneMask ok{};
   bool converged = false, fixed_steps = false;
   // Near a rotation (every stiff body under load), a fixed count of plain steps suffices and no step
   // needs checking. With F = U (I + E) and m = max|F^T F - I|, |E| <= 1.6 m for m <= 0.03, and a
   // plain step maps |E| to at most |E|^2 / (2 (1 - |E|)): from |E| <= 0.05, four steps reach 1e-25
   // (round-off); from |E| <= 1e-3, three.
   {
-    const Lanes c00 = F[0] * F[0] + F[3] * F[3] + F[6] * F[6], c11 = F[1] * F[1] + F[4] * F[4] + F[7] * F[7],
-                c22 = F[2] * F[2] + F[5] * F[5] + F[8] * F[8], c01 = F[0] * F[1] + F[3] * F[4] + F[6] * F[7],
-                c02 = F[0] * F[2] + F[3] * F[5] + F[6] * F[8], c12 = F[1] * F[2] + F[4] * F[5] + F[7] * F[8];
-    const Lanes defect[6] = {c00 - 1.0, c11 - 1.0, c22 - 1.0, c01, c02, c12};
-    Lanes m = Lanes{0, 0, 0, 0};
-    for (const Lanes& d : defect) {
-      const Lanes nd = -d;
-      const Lanes ad = SHATTER_LANE_MAX(d, nd);
+    const PlainLanes c00 = F[0] * F[0] + F[3] * F[3] + F[6] * F[6], c11 = F[1] * F[1] + F[4] * F[4] + F[7] * F[7],
+                     c22 = F[2] * F[2] + F[5] * F[5] + F[8] * F[8], c01 = F[0] * F[1] + F[3] * F[4] + F[6] * F[7],
+                     c02 = F[0] * F[2] + F[3] * F[5] + F[6] * F[8], c12 = F[1] * F[2] + F[4] * F[5] + F[7] * F[8];
+    const PlainLanes defect[6] = {c00 - 1.0, c11 - 1.0, c22 - 1.0, c01, c02, c12};
+    PlainLanes m = PlainLanes{0, 0, 0, 0};
+    for (const PlainLanes& d : defect) {
+      const PlainLanes nd = -d;
+      const PlainLanes ad = SHATTER_LANE_MAX(d, nd);
       m = SHATTER_LANE_MAX(m, ad);
     }
     bool four = true, three = true;
@@ -267,21 +266,21 @@ typedef long long LaneMask __attribute__((vector_size(4 * sizeof(long long))));
       ok = det > 1e-6 * scale * scale * scale;  // det F
     else
       ok &= det > 0.0;
-    Lanes change0, change;
+    PlainLanes change0, change;
     lane_max_abs_difference(X, Y, &change0);
-    Lanes nx = X[0] * X[0], ny = Y[0] * Y[0];
+    PlainLanes nx = X[0] * X[0], ny = Y[0] * Y[0];
     for (int i = 1; i < 9; ++i) nx += X[i] * X[i], ny += Y[i] * Y[i];
-    const Lanes ratio = ny / nx;
-    const Lanes root2 = SHATTER_LANE_SQRT(ratio);
-    const Lanes root4 = SHATTER_LANE_SQRT(root2);
-    const Lanes one = Lanes{1, 1, 1, 1};
-    const Lanes z = change0 > 1e-2 ? root4 : one;
-    const Lanes zi = 1.0 / z;
-    Lanes next[9];
+    const PlainLanes ratio = ny / nx;
+    const PlainLanes root2 = SHATTER_LANE_SQRT(ratio);
+    const PlainLanes root4 = SHATTER_LANE_SQRT(root2);
+    const PlainLanes one = PlainLanes{1, 1, 1, 1};
+    const PlainLanes z = change0 > 1e-2 ? root4 : one;
+    const PlainLanes zi = 1.0 / z;
+    PlainLanes next[9];
     for (int i = 0; i < 9; ++i) next[i] = 0.5 * (z * X[i] + Y[i] * zi);
     lane_max_abs_difference(next, X, &change);
     for (int i = 0; i < 9; ++i) X[i] = next[i];
-    const LaneMask done = (change <= 1e-8) | ~ok;  // failed lanes are left to the fallback
+    const PlainLaneMask done = (change <= 1e-8) | ~ok;  // failed lanes are left to the fallback
     converged = done[0] && done[1] && done[2] && done[3];
   }
   if (!fixed_steps) {
@@ -307,7 +306,7 @@ typedef long long LaneMask __attribute__((vector_size(4 * sizeof(long long))));
 
 // Four consecutive packed values as one lane vector.
 #define SHATTER_LOAD(p) \
-  Lanes { (p)[0], (p)[1], (p)[2], (p)[3] }
+  PlainLanes { (p)[0], (p)[1], (p)[2], (p)[3] }
 
 namespace {
 
@@ -329,8 +328,8 @@ struct BlockArgs {
 // triangular), the rest volume V and F' = Ds R^-1 row-major, whose columns are a = d0 r00,
 // b = d0 r01 + d1 r11 and c = d0 r02 + d1 r12 + d2 r22 for the edges d_k = x_{k+1} - x_0.
 struct RotatedFrame {
-  Lanes r00, r01, r02, r11, r12, r22, vol;
-  Lanes F[9];
+  PlainLanes r00, r01, r02, r11, r12, r22, vol;
+  PlainLanes F[9];
 };
 
 [[gnu::always_inline]] inline void load_rotated_frame(const BlockArgs& a, std::int64_t g0, int lanes, RotatedFrame* f) {
@@ -338,9 +337,9 @@ struct RotatedFrame {
   f->r00 = SHATTER_LOAD(r), f->r01 = SHATTER_LOAD(r + 4), f->r02 = SHATTER_LOAD(r + 8);
   f->r11 = SHATTER_LOAD(r + 12), f->r12 = SHATTER_LOAD(r + 16), f->r22 = SHATTER_LOAD(r + 20);
   f->vol = SHATTER_LOAD(r + 24);
-  Lanes d[9];  // d[3 k + axis]: edge k + 1
+  PlainLanes d[9];  // d[3 k + axis]: edge k + 1
   load_edges(a.tets, a.x, a.last_node, g0, lanes, d);
-  const Lanes &r00 = f->r00, &r01 = f->r01, &r02 = f->r02, &r11 = f->r11, &r12 = f->r12, &r22 = f->r22;
+  const PlainLanes &r00 = f->r00, &r01 = f->r01, &r02 = f->r02, &r11 = f->r11, &r12 = f->r12, &r22 = f->r22;
 #pragma GCC unroll 4
   for (int i = 0; i < 3; ++i) {
     f->F[3 * i] = d[i] * r00;
@@ -351,12 +350,12 @@ struct RotatedFrame {
 
 // The corner forces out[3 k + axis] from M = V P' (row-major): [f1 f2 f3] = M R^-T with R^-1
 // upper triangular, f0 = -(f1 + f2 + f3).
-[[gnu::always_inline]] inline void rotated_frame_forces(const Lanes* M, const RotatedFrame& f, Lanes* out) {
+[[gnu::always_inline]] inline void rotated_frame_forces(const PlainLanes* M, const RotatedFrame& f, PlainLanes* out) {
 #pragma GCC unroll 4
   for (int i = 0; i < 3; ++i) {
-    const Lanes f1 = M[3 * i] * f.r00 + M[3 * i + 1] * f.r01 + M[3 * i + 2] * f.r02;
-    const Lanes f2 = M[3 * i + 1] * f.r11 + M[3 * i + 2] * f.r12;
-    const Lanes f3 = M[3 * i + 2] * f.r22;
+    const PlainLanes f1 = M[3 * i] * f.r00 + M[3 * i + 1] * f.r01 + M[3 * i + 2] * f.r02;
+    const PlainLanes f2 = M[3 * i + 1] * f.r11 + M[3 * i + 2] * f.r12;
+    const PlainLanes f3 = M[3 * i + 2] * f.r22;
     out[i] = -(f1 + f2 + f3);
     out[3 + i] = f1, out[6 + i] = f2, out[9 + i] = f3;
   }
@@ -370,12 +369,12 @@ struct RotatedFrame {
     const int lanes = static_cast<int>(std::min<std::int64_t>(4, a.hi - g0));
     RotatedFrame f;
     load_rotated_frame(a, g0, lanes, &f);
-    const Lanes& vol = f.vol;
+    const PlainLanes& vol = f.vol;
     // F' columns a, b, c.
-    const Lanes &ax = f.F[0], &bx = f.F[1], &cx = f.F[2], &ay = f.F[3], &by = f.F[4], &cy = f.F[5], &az = f.F[6],
-                &bz = f.F[7], &cz = f.F[8];
+    const PlainLanes &ax = f.F[0], &bx = f.F[1], &cx = f.F[2], &ay = f.F[3], &by = f.F[4], &cy = f.F[5], &az = f.F[6],
+                     &bz = f.F[7], &cz = f.F[8];
     // C = F'^T F': dot products of the columns.
-    Lanes caa, cbb, ccc, cab, cac, cbc;
+    PlainLanes caa, cbb, ccc, cab, cac, cbc;
     lane_dot3(ax, ay, az, ax, ay, az, &caa);
     lane_dot3(bx, by, bz, bx, by, bz, &cbb);
     lane_dot3(cx, cy, cz, cx, cy, cz, &ccc);
@@ -383,21 +382,21 @@ struct RotatedFrame {
     lane_dot3(ax, ay, az, cx, cy, cz, &cac);
     lane_dot3(bx, by, bz, cx, cy, cz, &cbc);
     // V S' = V (mu (C - I) + lambda/2 (tr C - 3) I).
-    const Lanes vmu = vol * a.mu, vlh = vol * (0.5 * a.lambda);
-    const Lanes ltr = vlh * (caa + cbb + ccc - 3.0);
-    const Lanes shift = ltr - vmu;
-    const Lanes saa = vmu * caa + shift, sbb = vmu * cbb + shift, scc = vmu * ccc + shift;
-    const Lanes sab = vmu * cab, sac = vmu * cac, sbc = vmu * cbc;
+    const PlainLanes vmu = vol * a.mu, vlh = vol * (0.5 * a.lambda);
+    const PlainLanes ltr = vlh * (caa + cbb + ccc - 3.0);
+    const PlainLanes shift = ltr - vmu;
+    const PlainLanes saa = vmu * caa + shift, sbb = vmu * cbb + shift, scc = vmu * ccc + shift;
+    const PlainLanes sab = vmu * cab, sac = vmu * cac, sbc = vmu * cbc;
     // M = F' (V S'), row-major; H = M R^-T.
-    Lanes M[9];
+    PlainLanes M[9];
 #pragma GCC unroll 4
     for (int i = 0; i < 3; ++i) {
-      const Lanes &fa = f.F[3 * i], &fb = f.F[3 * i + 1], &fc = f.F[3 * i + 2];
+      const PlainLanes &fa = f.F[3 * i], &fb = f.F[3 * i + 1], &fc = f.F[3 * i + 2];
       lane_dot3(fa, fb, fc, saa, sab, sac, &M[3 * i]);
       lane_dot3(fa, fb, fc, sab, sbb, sbc, &M[3 * i + 1]);
       lane_dot3(fa, fb, fc, sac, sbc, scc, &M[3 * i + 2]);
     }
-    Lanes out[12];
+    PlainLanes out[12];
     rotated_frame_forces(M, f, out);
     scatter_corner_forces(out, a.corner_slot, g0, lanes, a.slots);
   }
@@ -411,29 +410,29 @@ struct RotatedFrame {
     const int lanes = static_cast<int>(std::min<std::int64_t>(4, a.hi - g0));
     const double* r = a.packed + 10 * g0;  // 10 lane vectors per group of 4 tets
     // m = Dm^-1, row-major.
-    Lanes m[9];
+    PlainLanes m[9];
 #pragma GCC unroll 9
     for (int i = 0; i < 9; ++i) m[i] = SHATTER_LOAD(r + 4 * i);
-    const Lanes vol = SHATTER_LOAD(r + 36);
-    Lanes d[9];  // Ds columns d0 d1 d2 (edges from corner 0): d[3 k + axis]
+    const PlainLanes vol = SHATTER_LOAD(r + 36);
+    PlainLanes d[9];  // Ds columns d0 d1 d2 (edges from corner 0): d[3 k + axis]
     load_edges(a.tets, a.x, a.last_node, g0, lanes, d);
     // F = Ds m: F(i, j) = d0_i m0j + d1_i m1j + d2_i m2j.
-    Lanes F[9];
+    PlainLanes F[9];
 #pragma GCC unroll 4
     for (int i = 0; i < 3; ++i)
 #pragma GCC unroll 4
       for (int j = 0; j < 3; ++j) lane_dot3(d[i], d[3 + i], d[6 + i], m[j], m[3 + j], m[6 + j], &F[3 * i + j]);
     // V P, symmetric: diagonal 2 mu V (F_ii - 1) + lambda V tr(eps), off-diagonal mu V (F_ij + F_ji).
-    const Lanes vmu = vol * a.mu, vl = vol * a.lambda;
-    const Lanes ltr = vl * ((F[0] - 1.0) + (F[4] - 1.0) + (F[8] - 1.0));
-    Lanes P[9];
+    const PlainLanes vmu = vol * a.mu, vl = vol * a.lambda;
+    const PlainLanes ltr = vl * ((F[0] - 1.0) + (F[4] - 1.0) + (F[8] - 1.0));
+    PlainLanes P[9];
 #pragma GCC unroll 4
     for (int i = 0; i < 3; ++i) P[4 * i] = 2.0 * vmu * (F[4 * i] - 1.0) + ltr;
     P[1] = P[3] = vmu * (F[1] + F[3]);
     P[2] = P[6] = vmu * (F[2] + F[6]);
     P[5] = P[7] = vmu * (F[5] + F[7]);
     // f_k (k = 1, 2, 3) = V P (row k - 1 of m).
-    Lanes out[12];
+    PlainLanes out[12];
 #pragma GCC unroll 4
     for (int k = 1; k < 4; ++k)
 #pragma GCC unroll 4
@@ -455,18 +454,18 @@ struct RotatedFrame {
     const int lanes = static_cast<int>(std::min<std::int64_t>(4, a.hi - g0));
     RotatedFrame f;
     load_rotated_frame(a, g0, lanes, &f);
-    const Lanes* F = f.F;
-    Lanes R[9];
+    const PlainLanes* F = f.F;
+    PlainLanes R[9];
     lane_polar_rotation(F, lanes, R);
     // V P' = 2 mu V (F' - R') + lambda V (tr(R'^T F') - 3) R'.
-    Lanes tr = R[0] * F[0];
+    PlainLanes tr = R[0] * F[0];
 #pragma GCC unroll 9
     for (int i = 1; i < 9; ++i) tr += R[i] * F[i];
-    const Lanes vmu2 = f.vol * (2.0 * a.mu), vlt = f.vol * a.lambda * (tr - 3.0);
-    Lanes P[9];
+    const PlainLanes vmu2 = f.vol * (2.0 * a.mu), vlt = f.vol * a.lambda * (tr - 3.0);
+    PlainLanes P[9];
 #pragma GCC unroll 9
     for (int i = 0; i < 9; ++i) P[i] = vmu2 * (F[i] - R[i]) + vlt * R[i];
-    Lanes out[12];
+    PlainLanes out[12];
     rotated_frame_forces(P, f, out);  // H = V P' R^-T
     scatter_corner_forces(out, a.corner_slot, g0, lanes, a.slots);
   }

@@ -15,16 +15,13 @@ namespace shatter {
 // give the same bits). Vectors live only inside the passes and in WideContact.
 static_assert(ContactBatches::kLanes == 4);
 
-namespace {
-
+// Outside the anonymous namespace: WideContact (declared in contact_batches.h) holds these.
 struct Lane3 {
   Lanes x, y, z;
 };
 static_assert(alignof(Lanes) == 32 && alignof(Lane3) == 32);
 
 [[gnu::always_inline]] inline Lanes dot(const Lane3& a, const Lane3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-
-}  // namespace
 
 // One point slot of four constraints (zeros where a constraint has fewer points: no mass, no
 // impulse). The fields are those of ContactPoint the passes read or write.

@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "shatter/core/assert.h"
+#include "shatter/core/clock.h"
 #include "shatter/core/parallel.h"
 #include "shatter/fracture/cut.h"
 #include "shatter/fracture/fragments.h"
@@ -23,10 +24,6 @@
 
 namespace shatter {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 // A loaded contact in the body frame.
 struct LocalLoad {

@@ -16,6 +16,7 @@
 #include <optional>
 #include <utility>
 
+#include "shatter/core/clock.h"
 #include "shatter/core/file_io.h"
 #include "shatter/core/json_reader.h"
 #include "shatter/mesh/io/mesh_io.h"
@@ -29,9 +30,6 @@ namespace {
 using json_input::Json;
 using json_input::ObjectReader;
 using json_input::Where;
-using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 // Scenes are small; a larger file is a mistake.
 constexpr std::uint64_t kMaxSceneBytes = 16ULL << 20;

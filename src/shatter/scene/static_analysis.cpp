@@ -7,15 +7,13 @@
 #include <system_error>
 #include <utility>
 
+#include "shatter/core/clock.h"
 #include "shatter/core/file_io.h"
 #include "shatter/mesh/io/mesh_io.h"
 #include "shatter/scene/static_fracture.h"
 
 namespace shatter {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 // Mark fragment_<k>.<ext> (and .ele beside .node) for k >= first, left by an earlier run that made
 // more fragments, for removal when the batch commits, so the folder then holds exactly this run's

@@ -7,13 +7,11 @@
 #include <chrono>
 #include <cmath>
 
+#include "shatter/core/clock.h"
+
 namespace shatter {
 
 namespace {
-
-double elapsed_ms(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
 
 bool all_finite(const Eigen::VectorXd& v) { return v.allFinite(); }
 
@@ -38,7 +36,7 @@ Result<LinearSolverKind> parse_linear_solver_kind(std::string_view name) {
 }
 
 LinearSolveReport LinearSolver::solve(const BlockSparseMatrix& a, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = Clock::now();
   LinearSolveReport report;
   if (b.size() != a.size()) {
     x.setZero(a.size());
@@ -59,7 +57,7 @@ LinearSolveReport LinearSolver::solve(const BlockSparseMatrix& a, const Eigen::V
     report.converged = false;
     if (report.message.empty()) report.message = "solution is not finite";
   }
-  report.time_ms = elapsed_ms(start);
+  report.time_ms = ms_since(start);
   return report;
 }
 

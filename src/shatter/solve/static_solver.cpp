@@ -11,18 +11,13 @@
 #include <optional>
 #include <utility>
 
+#include "shatter/core/clock.h"
 #include "shatter/core/parallel.h"
 #include "shatter/fem/tet_kernels.h"
 
 namespace shatter {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 Mat34 corners(const FemModel& model, const std::vector<Vec3>& x, Index e) {
   Mat34 xe;

@@ -13,6 +13,7 @@
 #include <tuple>
 #include <utility>
 
+#include "shatter/core/clock.h"
 #include "shatter/core/hash.h"
 #include "shatter/core/log.h"
 #include "shatter/core/parallel.h"
@@ -22,12 +23,8 @@
 namespace shatter {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
 // An impact event is analysed at the latest this many steps after it opened.
 constexpr int kMaxImpactSteps = 3;
-
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 Transform transform_of(const RigidState& r) { return {r.orientation.toRotationMatrix(), r.position}; }
 
