@@ -215,7 +215,7 @@ void build_blocks(FemModel& model) {
 // round-off. A lane that is inverted, nearly singular (det F below 1e-6 of max|F|^3) or not
 // converged in 30 steps gets polar_decomposition's answer (SVD where Newton cannot), so each lane's
 // R is a rotation. Deterministic: a lane's steps depend on its group of four, which is fixed.
-// PlainLanes from `lanes` on are padding: left as they come.
+// Lanes from `lanes` on are padding: left as they come.
 [[gnu::always_inline]] inline void lane_polar_rotation(const PlainLanes* F, int lanes, PlainLanes* R) {
   PlainLanes scale = PlainLanes{0, 0, 0, 0};
   for (int i = 0; i < 9; ++i) {
