@@ -14,6 +14,7 @@
 #include "shatter/core/random.h"
 #include "shatter/fem/fem_model.h"
 #include "shatter/fem/material.h"
+#include "shatter/fem/tet_kernels.h"
 #include "shatter/mesh/generate.h"
 
 namespace shatter {
@@ -171,6 +172,37 @@ TEST(BlockSparseMatrix, BufferedRefillGivesTheSameBitsOnAnyThreadCount) {
   ASSERT_EQ(values.size(), 3U);
   EXPECT_TRUE(values[0] == values[1]);
   EXPECT_TRUE(values[0] == values[2]);
+}
+
+// A corotated refill from the tets' polar decompositions, found beforehand, gives the bits of one
+// that finds them itself: exact and projected, at a state that compresses some tets.
+TEST(BlockSparseMatrix, CorotatedRefillFromKnownPolarDecompositionsGivesTheSameBits) {
+  const Case c = make_case(21, false);
+  Random rng(22);
+  const FemModel model = make_fem_model(c.mesh, *material_preset("modelling_clay"), ModelKind::corotated);
+  std::vector<Vec3> x = c.mesh.positions;
+  for (Vec3& p : x) p += 0.02 * rng.uniform_vec3(-1, 1);
+  std::vector<Polar> polar(c.mesh.tets.size());
+  for (std::size_t e = 0; e < polar.size(); ++e) {
+    Mat34 xe;
+    for (int k = 0; k < 4; ++k) xe.col(k) = x[c.mesh.tets[e][k]];
+    polar[e] = polar_decomposition(deformation_gradient(model.rest[e], xe));
+  }
+  for (bool projected : {false, true}) {
+    BlockSparseMatrix found(static_cast<Index>(x.size()), c.mesh.tets, c.anchors);
+    BlockSparseMatrix given(static_cast<Index>(x.size()), c.mesh.tets, c.anchors);
+    assemble_stiffness(model, x, AssemblyOptions{.project_psd = projected}, found);
+    assemble_stiffness(model, x, AssemblyOptions{.project_psd = projected}, given, polar);
+    EXPECT_TRUE(std::equal(found.values(), found.values() + found.num_values(), given.values())) << projected;
+  }
+  // The given decompositions are the ones read: unrotated ones give another matrix.
+  std::vector<Polar> unrotated = polar;
+  for (Polar& p : unrotated) p.R = Mat3::Identity();
+  BlockSparseMatrix found(static_cast<Index>(x.size()), c.mesh.tets, c.anchors);
+  BlockSparseMatrix given(static_cast<Index>(x.size()), c.mesh.tets, c.anchors);
+  assemble_stiffness(model, x, AssemblyOptions{.project_psd = false}, found);
+  assemble_stiffness(model, x, AssemblyOptions{.project_psd = false}, given, unrotated);
+  EXPECT_FALSE(std::equal(found.values(), found.values() + found.num_values(), given.values()));
 }
 
 }  // namespace

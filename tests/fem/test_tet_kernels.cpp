@@ -187,6 +187,66 @@ TEST(TetKernels, ProjectPsd) {
   EXPECT_GE(Eigen::SelfAdjointEigenSolver<Mat12>(project_psd(K)).eigenvalues().minCoeff(), -1e-12 * K.norm());
 }
 
+// The corotated projection against an independent one: the 9x9 Hessian in F built column by
+// column from first_piola_differential, projected by a numerical eigen-decomposition, mapped to the
+// corners by D = dF/dx (K = V D^T H+ D). Mild deformations keep the exact stiffness bit for bit;
+// strong compressions are indefinite and come out positive semi-definite.
+TEST(TetKernels, CorotatedProjectionClampsTheHessianInF) {
+  Random rng(5);
+  using Mat9 = Eigen::Matrix<double, 9, 9>;
+  using Mat9x12 = Eigen::Matrix<double, 9, 12>;
+  int indefinite = 0, kept = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const Lame lame = test::random_lame(rng);
+    const Mat34 m = test::random_tet(rng, rng.uniform(0.01, 10.0));
+    const TetRest r = tet_rest(m);
+    // Stretches along a random axis (every twist eigenvalue positive), then general deformations
+    // squashed by up to 60 % along a random axis, each with a random rotation. (Any compression
+    // makes a twist mode negative: at rest they are the rotations' zero modes.)
+    const Vec3 axis = rng.unit_vec3();
+    const Mat3 rotation = test::random_rotation(rng);
+    const Mat3 F = trial < 40 ? Mat3(rotation * (Mat3::Identity() + rng.uniform(0.01, 0.3) * axis * axis.transpose()))
+                              : Mat3(rotation * (Mat3::Identity() - rng.uniform(0.05, 0.6) * axis * axis.transpose()) *
+                                     test::random_deformation(rng, 0.2));
+    const Mat34 x = deform(m, F, Vec3::Zero());
+    const Mat12 K = tet_stiffness(ModelKind::corotated, lame, r, x);
+    const Mat12 Kp = corotated_projected_stiffness(lame, r, x);
+    // Hessian in F: column 3 c + b (dF = e_b e_c^T) is vec(dP) in the same ordering.
+    Mat9 H;
+    for (int c = 0; c < 3; ++c)
+      for (int b = 0; b < 3; ++b) {
+        Mat3 dF = Mat3::Zero();
+        dF(b, c) = 1.0;
+        const Mat3 dP = first_piola_differential(ModelKind::corotated, lame, F, dF);
+        H.col(3 * c + b) = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(dP.data());
+      }
+    const Eigen::SelfAdjointEigenSolver<Mat9> eig(0.5 * (H + H.transpose()));
+    const Mat9 H_plus =
+        eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
+    // D: vec(dF) for each corner displacement, dF = dx_i grad(b_i)^T.
+    const Mat43 B = shape_gradients(r);
+    Mat9x12 D = Mat9x12::Zero();
+    for (int i = 0; i < 4; ++i)
+      for (int b = 0; b < 3; ++b)
+        for (int c = 0; c < 3; ++c) D(3 * c + b, 3 * i + b) = B(i, c);
+    const Mat12 expected = r.volume * D.transpose() * H_plus * D;
+    const double scale = (r.volume * D.transpose() * H * D).norm();
+    EXPECT_LT((Kp - expected).norm(), 1e-9 * scale) << "trial " << trial;
+    EXPECT_EQ(Kp, Kp.transpose()) << "trial " << trial;
+    EXPECT_EQ(K, K.transpose()) << "trial " << trial;
+    EXPECT_GE(Eigen::SelfAdjointEigenSolver<Mat12>(Kp).eigenvalues().minCoeff(), -1e-12 * scale) << "trial " << trial;
+    if (eig.eigenvalues().minCoeff() < -1e-9 * scale) {
+      ++indefinite;
+      EXPECT_LT(Eigen::SelfAdjointEigenSolver<Mat12>(K).eigenvalues().minCoeff(), -1e-9 * scale);
+    } else if (Kp == K) {
+      ++kept;
+    }
+  }
+  // Both branches ran: every stretch kept the exact stiffness, and most squashed tets needed the clamp.
+  EXPECT_GT(indefinite, 80);
+  EXPECT_GE(kept, 40);
+}
+
 void expect_eigen_pairs(const Mat3& A, const Principal& p) {
   for (int k = 0; k < 3; ++k) {
     EXPECT_LT((A * p.vectors.col(k) - p.values[k] * p.vectors.col(k)).norm(), 1e-13 * (1 + A.norm()));

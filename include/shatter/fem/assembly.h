@@ -6,10 +6,12 @@
 #include <Eigen/SparseCore>
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "shatter/core/parallel.h"
 #include "shatter/core/types.h"
+#include "shatter/fem/constitutive.h"
 
 namespace shatter {
 
@@ -139,7 +141,8 @@ struct AssemblyOptions {
   /// stays SPD when elements are compressed. linear: already PSD. stvk: the negative part of the
   /// 2nd Piola-Kirchhoff stress S is removed from the geometric stiffness V (B S B^T) (x) I (the
   /// material part is PSD): a 3x3 eigenproblem instead of a 12x12 one, and no change at all where
-  /// S is PSD. corotated: project_psd (12x12 eigen-decomposition).
+  /// S is PSD. corotated: the negative eigenvalues of its Hessian in F clamped (a 3x3 eigenproblem
+  /// where one may be negative, corotated_projected_stiffness).
   bool project_psd = true;
 };
 
@@ -147,9 +150,11 @@ struct AssemblyOptions {
 Mat12 element_stiffness(const FemModel& model, Index e, const Mat34& xe, bool make_psd);
 
 /// Refill `matrix` (whose pattern was built for model.tets) with the stiffness dF/dx at the
-/// deformed positions x (m, #nodes). Element matrices are symmetrised.
+/// deformed positions x (m, #nodes). Element matrices are symmetrised. A corotated model may pass
+/// `polar`, the polar decomposition of each tet's F at x (#tets; only the matrix's active tets are
+/// read), found already for the forces: the same bits without finding it again.
 void assemble_stiffness(const FemModel& model, const std::vector<Vec3>& x, const AssemblyOptions& options,
-                        BlockSparseMatrix& matrix);
+                        BlockSparseMatrix& matrix, std::span<const Polar> polar = {});
 
 // ---------------------------------------------------------------------------------------------
 

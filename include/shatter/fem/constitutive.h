@@ -40,5 +40,9 @@ struct Polar {
 /// and well defined at equal singular values, F near a rotation); for inverted or nearly singular F
 /// from Eigen's JacobiSVD (MPL2).
 Polar polar_decomposition(const Mat3& F);
+/// The corotated model's psi(F) and P(F) from F's polar decomposition p, bit for bit what
+/// energy_density and first_piola compute: callers that need several quantities of one F find p once.
+double corotated_energy_density(const Lame& lame, const Mat3& F, const Polar& p);
+Mat3 corotated_first_piola(const Lame& lame, const Mat3& F, const Polar& p);
 
 }  // namespace shatter

@@ -31,10 +31,12 @@ double tet_energy(ModelKind kind, const Lame& lame, const TetRest& rest, const M
 /// the shape (the negative of the elastic force on the nodes). [f1 f2 f3] = V P Dm^-T,
 /// f0 = -(f1 + f2 + f3).
 Mat34 tet_internal_forces(ModelKind kind, const Lame& lame, const TetRest& rest, const Mat34& x);
+/// The same from the first Piola-Kirchhoff stress P of the tet's F (bit for bit).
+Mat34 tet_forces_from_stress(const TetRest& rest, const Mat3& P);
 /// d^2 U_e / dx^2, N/m, 12x12 with ordering [x0; x1; x2; x3], each xyz. Column 3i+a is the
-/// differential of the forces along the unit displacement of corner i in axis a. stvk and linear use
-/// a closed form per 3x3 block (exactly symmetric); corotated is built column by column from dP
-/// (symmetric to round-off). May be indefinite for stvk/corotated under compression.
+/// differential of the forces along the unit displacement of corner i in axis a. Every model uses a
+/// closed form per 3x3 block: symmetric to round-off for stvk and linear, to the last bit for
+/// corotated. May be indefinite for stvk/corotated under compression.
 Mat12 tet_stiffness(ModelKind kind, const Lame& lame, const TetRest& rest, const Mat34& x);
 /// The same from 12 evaluations of first_piola_differential (any model; slower; a cross-check).
 Mat12 tet_stiffness_from_differential(ModelKind kind, const Lame& lame, const TetRest& rest, const Mat34& x);
@@ -45,6 +47,15 @@ Mat12 project_psd(const Mat12& K);
 /// geometric term V (B S B^T) (x) I (the material term is positive semi-definite): positive
 /// semi-definite, exact where S is. Symmetric to the last bit.
 Mat12 stvk_projected_stiffness(const Lame& lame, const TetRest& rest, const Mat34& x);
+/// The corotated tet_stiffness with the negative eigenvalues of its Hessian in F (9x9, a closed-form
+/// eigensystem) clamped to 0: positive semi-definite, and bit for bit the exact one where those
+/// eigenvalues are clearly non-negative. Symmetric to the last bit. (Not project_psd: the clamp is
+/// in F, as projected Newton methods for hyperelasticity do, and needs a 3x3 eigenproblem at most.)
+Mat12 corotated_projected_stiffness(const Lame& lame, const TetRest& rest, const Mat34& x);
+/// The corotated tet_stiffness and corotated_projected_stiffness from the polar decomposition of the
+/// tet's F (bit for bit), for callers that found it already.
+Mat12 corotated_stiffness(const Lame& lame, const TetRest& rest, const Polar& polar);
+Mat12 corotated_projected_stiffness(const Lame& lame, const TetRest& rest, const Polar& polar);
 
 /// Cauchy (true) stress sigma = P F^T / det F, Pa; for the linear model the small-strain stress
 /// 2 mu eps + lambda tr(eps) I.

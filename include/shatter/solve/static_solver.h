@@ -274,9 +274,15 @@ class StaticSolver {
   Outcome line_search(SolveState& st, double s);
 
   void update_pattern(const FemModel& model, const std::vector<AnchorMask>& anchors);
-  /// Internal forces of the active tets at x, summed into force_.
+  /// Internal forces of the active tets at x, summed into force_ (taken from the last
+  /// active_energy when that was at the same x).
   void active_forces(const FemModel& model, const std::vector<Vec3>& x);
-  double active_energy(const FemModel& model, const std::vector<Vec3>& x) const;
+  /// Strain energy of the active tets at x, J. Finds their forces at x on the way (trial_*).
+  double active_energy(const FemModel& model, const std::vector<Vec3>& x);
+  /// Forces, their round-off bound and (corotated) F's polar decomposition of active tet slot s at
+  /// x, into tet_force_[s], tet_force_error_[s] and polar[tet]; the tet's energy, J.
+  double tet_forces(const FemModel& model, const std::vector<Vec3>& x, std::size_t s, std::vector<Mat34>& force,
+                    std::vector<double>& error, std::vector<Polar>& polar) const;
 
   StaticSolverOptions options_;
   BlockSparseMatrix matrix_;
@@ -289,10 +295,20 @@ class StaticSolver {
   std::vector<Mat34> tet_force_;         ///< forces per active tet, N (#active tets)
   std::vector<double> force_error_;      ///< squared round-off estimate per component of force_, N^2 (#nodes)
   std::vector<double> tet_force_error_;  ///< round-off estimate per force component per active tet, N
-  Eigen::VectorXd first_step_;           ///< first Newton step of the last load step (#DOFs)
-  bool direct_checked_ = false;          ///< direct_when_cheaper weighed the factorization for this pattern
-  bool prefer_direct_ = false;           ///< ... and found it cheaper than PCG
-  bool prefer_two_level_ = false;        ///< ... or found PCG with the two-level preconditioner cheapest
+  /// Corotated models: the polar decomposition of each active tet's F where tet_force_ was found,
+  /// which the stiffness refill there reads (#tets, by tet).
+  std::vector<Polar> tet_polar_;
+  std::vector<Vec3> forces_at_;  ///< positions tet_force_ and tet_polar_ belong to, m (empty: none)
+  /// The same found by the last active_energy (a line-search trial): taken over by active_forces
+  /// when the trial is accepted, since the next residual is at that x.
+  std::vector<Mat34> trial_force_;
+  std::vector<double> trial_force_error_;
+  std::vector<Polar> trial_polar_;
+  std::vector<Vec3> trial_at_;
+  Eigen::VectorXd first_step_;     ///< first Newton step of the last load step (#DOFs)
+  bool direct_checked_ = false;    ///< direct_when_cheaper weighed the factorization for this pattern
+  bool prefer_direct_ = false;     ///< ... and found it cheaper than PCG
+  bool prefer_two_level_ = false;  ///< ... or found PCG with the two-level preconditioner cheapest
   // The weighing's estimates, in multiply-adds: a factorization and solve, going on with PCG, the
   // two-level preconditioner's set-up per solve and its cost per iteration.
   double direct_cost_ = 0;

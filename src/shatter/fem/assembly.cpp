@@ -256,16 +256,28 @@ void BlockSparseMatrix::finish_fill() {
 Mat12 element_stiffness(const FemModel& model, Index e, const Mat34& xe, bool make_psd) {
   // StVK: K = K_material + V (B S B^T) (x) I; the material part is PSD (mu > 0, bulk modulus > 0),
   // the geometric part is PSD iff S is, so the projection removes the negative part of S from it.
+  // Corotated: its twist modes' negative eigenvalues clamped (corotated_projected_stiffness).
   if (make_psd && model.model == ModelKind::stvk) return stvk_projected_stiffness(model.lame, model.rest[e], xe);
-  Mat12 k = tet_stiffness(model.model, model.lame, model.rest[e], xe);
+  if (make_psd && model.model == ModelKind::corotated)
+    return corotated_projected_stiffness(model.lame, model.rest[e], xe);
   // The linear model's is constant and positive semi-definite.
-  if (make_psd && model.model == ModelKind::corotated) k = project_psd(k);
-  return 0.5 * (k + k.transpose());  // exactly symmetric: the storage relies on it
+  const Mat12 k = tet_stiffness(model.model, model.lame, model.rest[e], xe);
+  if (model.model == ModelKind::corotated) return k;  // symmetric to the last bit by construction
+  return 0.5 * (k + k.transpose());                   // exactly symmetric: the storage relies on it
 }
 
 void assemble_stiffness(const FemModel& model, const std::vector<Vec3>& x, const AssemblyOptions& options,
-                        BlockSparseMatrix& matrix) {
+                        BlockSparseMatrix& matrix, std::span<const Polar> polar) {
   SHATTER_CHECK(static_cast<Index>(x.size()) == matrix.num_nodes());
+  if (!polar.empty() && model.model == ModelKind::corotated) {
+    SHATTER_CHECK(static_cast<Index>(polar.size()) == model.num_tets());
+    matrix.refill([&](Index e) -> Mat12 {
+      const Polar& p = polar[static_cast<std::size_t>(e)];
+      return options.project_psd ? corotated_projected_stiffness(model.lame, model.rest[e], p)
+                                 : corotated_stiffness(model.lame, model.rest[e], p);
+    });
+    return;
+  }
   matrix.refill([&](Index e) -> Mat12 {
     Mat34 xe;
     for (int k = 0; k < 4; ++k) xe.col(k) = x[model.tets[e][k]];

@@ -122,6 +122,17 @@ bool polar_rotation_newton(const Mat3& F, Mat3& R) {
   return p;
 }
 
+[[gnu::flatten]] double corotated_energy_density(const Lame& l, const Mat3& F, const Polar& p) {
+  // psi = mu |F - R|^2 + lambda/2 tr(S - I)^2
+  const double tr = p.S.trace() - 3.0;
+  return l.mu * (F - p.R).squaredNorm() + 0.5 * l.lambda * tr * tr;
+}
+
+[[gnu::flatten]] Mat3 corotated_first_piola(const Lame& l, const Mat3& F, const Polar& p) {
+  // P = 2 mu (F - R) + lambda tr(S - I) R
+  return 2.0 * l.mu * (F - p.R) + l.lambda * (p.S.trace() - 3.0) * p.R;
+}
+
 [[gnu::flatten]] double energy_density(ModelKind kind, const Lame& l, const Mat3& F) {
   switch (kind) {
     case ModelKind::stvk: {
@@ -135,12 +146,7 @@ bool polar_rotation_newton(const Mat3& F, Mat3& R) {
       const double tr = e.trace();
       return l.mu * e.squaredNorm() + 0.5 * l.lambda * tr * tr;
     }
-    case ModelKind::corotated: {
-      // psi = mu |F - R|^2 + lambda/2 tr(S - I)^2
-      const Polar p = polar_decomposition(F);
-      const double tr = p.S.trace() - 3.0;
-      return l.mu * (F - p.R).squaredNorm() + 0.5 * l.lambda * tr * tr;
-    }
+    case ModelKind::corotated: return corotated_energy_density(l, F, polar_decomposition(F));
   }
   return 0;
 }
@@ -152,11 +158,7 @@ bool polar_rotation_newton(const Mat3& F, Mat3& R) {
       const Mat3 e = small_strain(F);
       return 2.0 * l.mu * e + l.lambda * e.trace() * Mat3::Identity();
     }
-    case ModelKind::corotated: {
-      // P = 2 mu (F - R) + lambda tr(S - I) R
-      const Polar p = polar_decomposition(F);
-      return 2.0 * l.mu * (F - p.R) + l.lambda * (p.S.trace() - 3.0) * p.R;
-    }
+    case ModelKind::corotated: return corotated_first_piola(l, F, polar_decomposition(F));
   }
   return Mat3::Zero();
 }

@@ -43,7 +43,10 @@ double tet_energy(ModelKind kind, const Lame& lame, const TetRest& rest, const M
 }
 
 Mat34 tet_internal_forces(ModelKind kind, const Lame& lame, const TetRest& rest, const Mat34& x) {
-  const Mat3 P = first_piola(kind, lame, deformation_gradient(rest, x));
+  return tet_forces_from_stress(rest, first_piola(kind, lame, deformation_gradient(rest, x)));
+}
+
+Mat34 tet_forces_from_stress(const TetRest& rest, const Mat3& P) {
   const Mat3 H = rest.volume * P * rest.Dm_inv.transpose();  // [f1 f2 f3] = V P Dm^-T
   Mat34 f;
   f.rightCols<3>() = H;
@@ -77,37 +80,66 @@ namespace {
   return K;
 }
 
-// Corotated blocks from dP = 2 mu dF + lambda tr(R^T dF) R + c dR, c = lambda tr(S - I) - 2 mu, and
-// dR = R [w]x with (tr(S) I - S) w = axial(R^T dF - dF^T R) (first_piola_differential). For the
-// column dF = e_b g_j^T (corner j moved along axis b): R^T dF = r_b g_j^T with r_b = R^T e_b, so
-// tr(R^T dF) = r_b . g_j and the axial vector is g_j x r_b. The polar decomposition and
-// (tr(S) I - S)^-1 are found once per tet, not once per column.
-Mat12 corotated_stiffness(const Lame& lame, const TetRest& rest, const Mat34& x) {
-  const Mat3 F = deformation_gradient(rest, x);
-  const Polar p = polar_decomposition(F);
-  const Mat3 G_inv = (p.S.trace() * Mat3::Identity() - p.S).inverse();
-  const double c = lame.lambda * (p.S.trace() - 3.0) - 2.0 * lame.mu;
+// Corotated blocks in closed form, from dP = 2 mu dF + lambda tr(R^T dF) R + c dR with
+// c = lambda tr(S - I) - 2 mu and dR = R [w]x, (tr(S) I - S) w = axial(R^T dF - dF^T R)
+// (first_piola_differential). For the column dF = e_b g_j^T (corner j moved along axis b) the
+// axial vector is g_j x r_b with r_b = R^T e_b, and the c term of dP g_i is c R (w x g_i). Over the
+// three axes b that gives, with g_i = grad b_i, u_i = R g_i and A_i = R [g_i]x:
+//   K_ij = V [ 2 mu (g_i . g_j) I + lambda u_i u_j^T + A_i M A_j^T ],  M = c (tr(S) I - S)^-1.
+// At rest (R = I, S = I, M = -mu I) this is linear elasticity's mu (g_i . g_j) I + mu g_j g_i^T +
+// lambda g_i g_j^T. The upper blocks are computed and the lower ones are their transposes, so K is
+// symmetric to the last bit. M is the only part that the projection changes (corotated_mode_matrix).
+[[gnu::always_inline]] inline Mat12 corotated_blocks(const Lame& lame, const TetRest& rest, const Mat3& R,
+                                                     const Mat3& M) {
+  // Written out on plain arrays, the blocks' loops unrolled: as Eigen expressions GCC left the 3x3
+  // products as calls, and at -O2 it does not unroll the loops (938 against 440-570 ns per tet).
   const Mat43 B = shape_gradients(rest);
-  const Mat3 Dm_inv_t = rest.Dm_inv.transpose();
+  double g[4][3], u[4][3], A[4][3][3], AM[4][3][3];
+  for (int i = 0; i < 4; ++i) {
+    for (int k = 0; k < 3; ++k) g[i][k] = B(i, k);
+    for (int a = 0; a < 3; ++a) {
+      u[i][a] = R(a, 0) * g[i][0] + R(a, 1) * g[i][1] + R(a, 2) * g[i][2];
+      // Row a of R [g]x: column k is R (g x e_k).
+      A[i][a][0] = g[i][2] * R(a, 1) - g[i][1] * R(a, 2);
+      A[i][a][1] = g[i][0] * R(a, 2) - g[i][2] * R(a, 0);
+      A[i][a][2] = g[i][1] * R(a, 0) - g[i][0] * R(a, 1);
+    }
+    for (int a = 0; a < 3; ++a)
+      for (int k = 0; k < 3; ++k) AM[i][a][k] = A[i][a][0] * M(0, k) + A[i][a][1] * M(1, k) + A[i][a][2] * M(2, k);
+  }
+  const double V = rest.volume, two_mu = 2.0 * lame.mu, lambda = lame.lambda;
   Mat12 K;
-  for (int j = 0; j < 4; ++j) {
-    const Vec3 g = B.row(j).transpose();
-    for (int b = 0; b < 3; ++b) {
-      const Vec3 r = p.R.row(b).transpose();
-      const Vec3 w = G_inv * g.cross(r);
-      Mat3 W;
-      W << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
-      Mat3 dP = lame.lambda * r.dot(g) * p.R + c * (p.R * W);
-      dP.row(b) += 2.0 * lame.mu * g.transpose();
-      const Mat3 dH = rest.volume * dP * Dm_inv_t;
-      K.block<3, 1>(0, 3 * j + b) = -dH.rowwise().sum();
-      for (int i = 1; i < 4; ++i) K.block<3, 1>(3 * i, 3 * j + b) = dH.col(i - 1);
+  for (int i = 0; i < 4; ++i) {
+    for (int j = i; j < 4; ++j) {
+      const double diagonal = two_mu * (g[i][0] * g[j][0] + g[i][1] * g[j][1] + g[i][2] * g[j][2]);
+      double block[3][3];
+#pragma GCC unroll 3
+      for (int a = 0; a < 3; ++a)
+#pragma GCC unroll 3
+        for (int b = 0; b < 3; ++b)
+          block[a][b] = V * (AM[i][a][0] * A[j][b][0] + AM[i][a][1] * A[j][b][1] + AM[i][a][2] * A[j][b][2] +
+                             lambda * u[i][a] * u[j][b] + (a == b ? diagonal : 0.0));
+#pragma GCC unroll 3
+      for (int a = 0; a < 3; ++a)
+#pragma GCC unroll 3
+        for (int b = 0; b < 3; ++b) {
+          // A diagonal block's two triangles are the same sums in another order: averaged.
+          const double v = j == i ? 0.5 * (block[a][b] + block[b][a]) : block[a][b];
+          K(3 * i + a, 3 * j + b) = v;
+          K(3 * j + b, 3 * i + a) = v;
+        }
     }
   }
   return K;
 }
 
 }  // namespace
+
+[[gnu::flatten]] Mat12 corotated_stiffness(const Lame& lame, const TetRest& rest, const Polar& p) {
+  const double c = lame.lambda * (p.S.trace() - 3.0) - 2.0 * lame.mu;
+  const Mat3 G_inv = (p.S.trace() * Mat3::Identity() - p.S).inverse();
+  return corotated_blocks(lame, rest, p.R, c * 0.5 * (G_inv + G_inv.transpose()));
+}
 
 Mat12 tet_stiffness_from_differential(ModelKind kind, const Lame& lame, const TetRest& rest, const Mat34& x) {
   const Mat3 F = deformation_gradient(rest, x);
@@ -148,7 +180,8 @@ Mat12 tet_stiffness(ModelKind kind, const Lame& lame, const TetRest& rest, const
     case ModelKind::stvk: return stvk_stiffness(lame, rest, x);
     case ModelKind::linear:
       return stiffness_closed_form(lame, rest.volume, shape_gradients(rest), Mat3::Identity(), Mat3::Zero());
-    case ModelKind::corotated: return corotated_stiffness(lame, rest, x);
+    case ModelKind::corotated:
+      return corotated_stiffness(lame, rest, polar_decomposition(deformation_gradient(rest, x)));
   }
   return tet_stiffness_from_differential(kind, lame, rest, x);
 }
@@ -193,6 +226,40 @@ bool clearly_psd(const Mat3& S) {
       for (int j = 0; j < 4; ++j) k.block<3, 3>(3 * i, 3 * j).diagonal().array() -= g(i, j);
   }
   return 0.5 * (k + k.transpose());
+}
+
+// The corotated energy's Hessian in F (9x9) has a closed-form eigensystem (Smith, De Goes & Kim,
+// "Analytic eigensystems for isotropic distortion energies", 2019). With S = sum_k s_k v_k v_k^T:
+// on the three twist modes R [v_k]x / sqrt(2) the eigenvalue is 2 mu + 2 c / (s_a + s_b) ({a, b}
+// the other two indices); on vec(R) it is 2 mu + 3 lambda; on the five other modes 2 mu. Only the
+// twist modes can be negative (c < 0: compression), and only M's eigenvalues c / (s_a + s_b) carry
+// them: clamping them at -mu zeroes those modes, K = V D^T H+ D with D = dF/dx. A compressed tet
+// whose twist eigenvalues are all positive (tr(S) I - S + (c / mu) I clearly semi-definite) takes
+// the exact stiffness, bit for bit, without the 3x3 eigenproblem.
+Mat12 corotated_projected_stiffness(const Lame& lame, const TetRest& rest, const Mat34& x) {
+  return corotated_projected_stiffness(lame, rest, polar_decomposition(deformation_gradient(rest, x)));
+}
+
+[[gnu::flatten]] Mat12 corotated_projected_stiffness(const Lame& lame, const TetRest& rest, const Polar& p) {
+  const double c = lame.lambda * (p.S.trace() - 3.0) - 2.0 * lame.mu;
+  const Mat3 G = p.S.trace() * Mat3::Identity() - p.S;
+  const bool exact =
+      c < 0.0 ? clearly_psd(G + (c / lame.mu) * Mat3::Identity()) : clearly_psd(G) && G.determinant() > 0.0;
+  if (exact) {
+    const Mat3 G_inv = G.inverse();
+    return corotated_blocks(lame, rest, p.R, c * 0.5 * (G_inv + G_inv.transpose()));
+  }
+  Eigen::SelfAdjointEigenSolver<Mat3> eig;
+  eig.computeDirect(p.S);
+  const Vec3 s = eig.eigenvalues();
+  Mat3 M = Mat3::Zero();
+  for (int k = 0; k < 3; ++k) {
+    const double m = c / (s.sum() - s[k]);
+    // A zero s_a + s_b (an element flattened onto a line) has no finite Hessian: the mode gets 0.
+    const double clamped = std::isfinite(m) ? std::max(m, -lame.mu) : -lame.mu;
+    M += clamped * eig.eigenvectors().col(k) * eig.eigenvectors().col(k).transpose();
+  }
+  return corotated_blocks(lame, rest, p.R, 0.5 * (M + M.transpose()));
 }
 
 Mat12 project_psd(const Mat12& K) {

@@ -28,8 +28,7 @@ Mat34 corners(const FemModel& model, const std::vector<Vec3>& x, Index e) {
 // Smallest loops that go parallel (see parallel_for): about half a millisecond of work. An impact
 // solve of a few thousand tets then runs without a single parallel region, so it cannot stall
 // when the cores are oversubscribed.
-constexpr std::int64_t kMinParallelForceTets = 2048;   // ~0.2 us per tet
-constexpr std::int64_t kMinParallelEnergyTets = 8192;  // ~0.05 us per tet
+constexpr std::int64_t kMinParallelForceTets = 2048;  // forces and energy, ~0.2-0.4 us per tet
 
 // Armijo constant of the energy line search: a step must realise this fraction of the energy
 // decrease that the slope predicts.
@@ -80,31 +79,60 @@ void StaticSolver::update_pattern(const FemModel& model, const std::vector<Ancho
   ++pattern_builds_;
 }
 
+double StaticSolver::tet_forces(const FemModel& model, const std::vector<Vec3>& x, std::size_t s,
+                                std::vector<Mat34>& force, std::vector<double>& error,
+                                std::vector<Polar>& polar) const {
+  const Index e = matrix_.active_tets()[s];
+  const TetRest& rest = model.rest[e];
+  const Mat34 xe = corners(model, x, e);
+  const Mat3 F = deformation_gradient(rest, xe);
+  double energy = 0;
+  if (model.model == ModelKind::corotated) {
+    // One polar decomposition for the energy, the forces and the stiffness refill at this x.
+    Polar& p = polar[static_cast<std::size_t>(e)];
+    p = polar_decomposition(F);
+    energy = rest.volume * corotated_energy_density(model.lame, F, p);
+    force[s] = tet_forces_from_stress(rest, corotated_first_piola(model.lame, F, p));
+  } else {
+    energy = rest.volume * energy_density(model.model, model.lame, F);
+    force[s] = tet_forces_from_stress(rest, first_piola(model.model, model.lame, F));
+  }
+  // Round-off estimate of each force component: the positions hold the displacements only to
+  // eps |x| (absolute), and F - I cancels; both reach the stress through the moduli and the force
+  // through V Dm^-T (f = V P Dm^-T).
+  const double modulus = 2.0 * std::abs(model.lame.mu) + 3.0 * std::abs(model.lame.lambda);
+  const double g1 = rest.Dm_inv.cwiseAbs().colwise().sum().maxCoeff();    // ||Dm^-1||_1
+  const double ginf = rest.Dm_inv.cwiseAbs().rowwise().sum().maxCoeff();  // ||Dm^-1||_inf
+  const double f_norm = F.cwiseAbs().maxCoeff();
+  const double dF = std::numeric_limits<double>::epsilon() * (xe.cwiseAbs().maxCoeff() * g1 + f_norm);
+  error[s] = std::abs(rest.volume) * modulus * std::max(1.0, f_norm * f_norm) * dF * ginf;
+  return energy;
+}
+
 void StaticSolver::active_forces(const FemModel& model, const std::vector<Vec3>& x) {
   const std::vector<Index>& tets = matrix_.active_tets();
-  // Per-tet forces (and their round-off bounds) in one parallel loop, then a serial scatter in the
-  // fixed active-tet order: every node sums its tets in the same order whatever the thread count.
-  tet_force_.resize(tets.size());
-  tet_force_error_.resize(tets.size());
-  const double modulus = 2.0 * std::abs(model.lame.mu) + 3.0 * std::abs(model.lame.lambda);
-  parallel_for(
-      0, static_cast<std::int64_t>(tets.size()),
-      [&](std::int64_t s) {
-        const Index e = tets[static_cast<std::size_t>(s)];
-        const TetRest& rest = model.rest[e];
-        const Mat34 xe = corners(model, x, e);
-        tet_force_[static_cast<std::size_t>(s)] = tet_internal_forces(model.model, model.lame, rest, xe);
-        // Round-off estimate of each force component: the positions hold the displacements only to
-        // eps |x| (absolute), and F - I cancels; both reach the stress through the moduli and the
-        // force through V Dm^-T (f = V P Dm^-T).
-        const double g1 = rest.Dm_inv.cwiseAbs().colwise().sum().maxCoeff();    // ||Dm^-1||_1
-        const double ginf = rest.Dm_inv.cwiseAbs().rowwise().sum().maxCoeff();  // ||Dm^-1||_inf
-        const double f_norm = deformation_gradient(rest, xe).cwiseAbs().maxCoeff();
-        const double dF = std::numeric_limits<double>::epsilon() * (xe.cwiseAbs().maxCoeff() * g1 + f_norm);
-        tet_force_error_[static_cast<std::size_t>(s)] =
-            std::abs(rest.volume) * modulus * std::max(1.0, f_norm * f_norm) * dF * ginf;
-      },
-      kMinParallelForceTets);
+  if (!trial_at_.empty() && trial_at_ == x) {
+    // The accepted line-search trial: its forces were found with its energy.
+    tet_force_.swap(trial_force_);
+    tet_force_error_.swap(trial_force_error_);
+    tet_polar_.swap(trial_polar_);
+    forces_at_.swap(trial_at_);
+    trial_at_.clear();
+  } else {
+    // Per-tet forces (and their round-off bounds) in one parallel loop.
+    tet_force_.resize(tets.size());
+    tet_force_error_.resize(tets.size());
+    if (model.model == ModelKind::corotated) tet_polar_.resize(static_cast<std::size_t>(model.num_tets()));
+    parallel_for(
+        0, static_cast<std::int64_t>(tets.size()),
+        [&](std::int64_t s) {
+          tet_forces(model, x, static_cast<std::size_t>(s), tet_force_, tet_force_error_, tet_polar_);
+        },
+        kMinParallelForceTets);
+    forces_at_ = x;
+  }
+  // A serial scatter in the fixed active-tet order: every node sums its tets in the same order
+  // whatever the thread count.
   force_.assign(x.size(), Vec3::Zero());
   force_error_.assign(x.size(), 0.0);
   for (std::size_t s = 0; s < tets.size(); ++s)
@@ -115,15 +143,35 @@ void StaticSolver::active_forces(const FemModel& model, const std::vector<Vec3>&
     }
 }
 
-double StaticSolver::active_energy(const FemModel& model, const std::vector<Vec3>& x) const {
+double StaticSolver::active_energy(const FemModel& model, const std::vector<Vec3>& x) {
   const std::vector<Index>& tets = matrix_.active_tets();
-  return parallel_sum(
+  if (forces_at_ == x) {
+    // Where the forces are known (a load step's first line search): the energy alone, from the
+    // polar decompositions found with them.
+    const bool corotated = model.model == ModelKind::corotated;
+    return parallel_sum(
+        0, static_cast<std::int64_t>(tets.size()), 0.0,
+        [&](std::int64_t s) {
+          const Index e = tets[static_cast<std::size_t>(s)];
+          const TetRest& rest = model.rest[e];
+          const Mat3 F = deformation_gradient(rest, corners(model, x, e));
+          return rest.volume * (corotated ? corotated_energy_density(model.lame, F, tet_polar_[e])
+                                          : energy_density(model.model, model.lame, F));
+        },
+        512, kMinParallelForceTets);
+  }
+  trial_force_.resize(tets.size());
+  trial_force_error_.resize(tets.size());
+  if (model.model == ModelKind::corotated) trial_polar_.resize(static_cast<std::size_t>(model.num_tets()));
+  trial_at_.clear();  // not valid while being refilled
+  const double energy = parallel_sum(
       0, static_cast<std::int64_t>(tets.size()), 0.0,
       [&](std::int64_t s) {
-        const Index e = tets[s];
-        return tet_energy(model.model, model.lame, model.rest[e], corners(model, x, e));
+        return tet_forces(model, x, static_cast<std::size_t>(s), trial_force_, trial_force_error_, trial_polar_);
       },
-      512, kMinParallelEnergyTets);
+      512, kMinParallelForceTets);
+  trial_at_ = x;
+  return energy;
 }
 
 /// How a step of a solve ended: converged (go on), or the failure and why.
@@ -335,6 +383,9 @@ StaticSolver::Outcome StaticSolver::check_inputs(const SolveState& st) {
 }
 
 std::optional<StaticSolver::Outcome> StaticSolver::prepare(SolveState& st) {
+  // Forces kept from an earlier solve belong to its model.
+  forces_at_.clear();
+  trial_at_.clear();
   {
     const auto t = Clock::now();
     update_pattern(st.model, st.anchors);
@@ -538,7 +589,10 @@ StaticSolver::Outcome StaticSolver::newton_direction(SolveState& st, int iterati
     ++st.report.chord_iterations;
   } else {
     const auto t = Clock::now();
-    assemble_stiffness(st.model, st.x, AssemblyOptions{.project_psd = projected}, matrix_);
+    // A corotated refill reads the polar decompositions that the residual at this x found.
+    const bool have_polar = st.model.model == ModelKind::corotated && forces_at_ == st.x;
+    assemble_stiffness(st.model, st.x, AssemblyOptions{.project_psd = projected}, matrix_,
+                       have_polar ? std::span<const Polar>(tet_polar_) : std::span<const Polar>());
     st.report.assembly_ms += ms_since(t);
     st.have_tangent = true;
     st.tangent_projected = projected;
