@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "shatter/core/hash.h"
+#include "shatter/core/parallel.h"
 #include "shatter/mesh/validate.h"
 
 namespace shatter {
@@ -83,7 +84,10 @@ Vec3 apply_plastic_update(BodyModel& model, BodyState& state, const PlasticResul
   state.rigid.position += state.rigid.orientation * dc;
   m.center = Vec3::Zero();
   model.mass = m;
-  for (Index e = 0; e < model.mesh.num_tets(); ++e) set_tet_rest(model.fem, e, model.mesh.corners(e));
+  // Each tet's on its own (about 0.5 us: two 3x3 inverses and a QR), on threads: a clay teddy's
+  // 3.6k tets took 1.4-2 ms, most of a dent's cost.
+  parallel_for(
+      0, model.mesh.num_tets(), [&](std::int64_t e) { set_tet_rest(model.fem, e, model.mesh.corners(e)); }, 512);
   // Same faces in the same order: the crack flags stay valid.
   model.surface = boundary_surface(model.mesh, model.faces);
   return dc;
