@@ -195,7 +195,7 @@ TEST(TetKernels, CorotatedProjectionClampsTheHessianInF) {
   Random rng(5);
   using Mat9 = Eigen::Matrix<double, 9, 9>;
   using Mat9x12 = Eigen::Matrix<double, 9, 12>;
-  int indefinite = 0, kept = 0;
+  int indefinite = 0;
   for (int trial = 0; trial < 200; ++trial) {
     const Lame lame = test::random_lame(rng);
     const Mat34 m = test::random_tet(rng, rng.uniform(0.01, 10.0));
@@ -235,16 +235,18 @@ TEST(TetKernels, CorotatedProjectionClampsTheHessianInF) {
     EXPECT_EQ(Kp, Kp.transpose()) << "trial " << trial;
     EXPECT_EQ(K, K.transpose()) << "trial " << trial;
     EXPECT_GE(Eigen::SelfAdjointEigenSolver<Mat12>(Kp).eigenvalues().minCoeff(), -1e-12 * scale) << "trial " << trial;
-    if (eig.eigenvalues().minCoeff() < -1e-9 * scale) {
+    // A stretch has no negative twist mode: the exact stiffness, bit for bit.
+    if (trial < 40) {
+      EXPECT_EQ(Kp, K) << "trial " << trial;
+    }
+    // H is in Pa, K in N/m: each against its own size.
+    if (eig.eigenvalues().minCoeff() < -1e-9 * H.norm()) {
       ++indefinite;
       EXPECT_LT(Eigen::SelfAdjointEigenSolver<Mat12>(K).eigenvalues().minCoeff(), -1e-9 * scale);
-    } else if (Kp == K) {
-      ++kept;
     }
   }
-  // Both branches ran: every stretch kept the exact stiffness, and most squashed tets needed the clamp.
+  // Most squashed tets needed the clamp.
   EXPECT_GT(indefinite, 80);
-  EXPECT_GE(kept, 40);
 }
 
 void expect_eigen_pairs(const Mat3& A, const Principal& p) {
